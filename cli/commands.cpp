@@ -1,0 +1,218 @@
+#include "commands.h"
+
+#include <tbs/errors.h>
+#include <tbs/evaluator.h>
+#include <tbs/io.h>
+#include <tbs/knots.h>
+
+#include <nlohmann/json.hpp>
+
+#include <charconv>
+#include <cstdio>
+#include <iostream>
+#include <iterator>
+#include <sstream>
+
+namespace tbs::cli {
+namespace {
+
+using json = nlohmann::json;
+
+json box_json(const Point2& lo, const Point2& hi) {
+  return {{"min", {lo.x(), lo.y()}}, {"max", {hi.x(), hi.y()}}};
+}
+json box_json(const Box3& b) {
+  return {{"min", {b.min.x(), b.min.y(), b.min.z()}}, {"max", {b.max.x(), b.max.y(), b.max.z()}}};
+}
+
+// The surface's bounding box from samples: every triangle on a barycentric lattice.
+Box3 sampled_surface_box(const Spline& s) {
+  const int k = 8;
+  std::vector<Point2> pts;
+  const Domain& d = s.domain();
+  for (int t = 0; t < d.triangle_count(); ++t) {
+    const auto& tri = d.triangle(t);
+    for (int i = 0; i <= k; ++i)
+      for (int j = 0; i + j <= k; ++j) {
+        const double a = double(i) / k, b = double(j) / k;
+        pts.push_back(a * d.vertex(tri[0]) + b * d.vertex(tri[1]) + (1 - a - b) * d.vertex(tri[2]));
+      }
+  }
+  std::vector<Point3> pos(pts.size());
+  Evaluator ev(s);
+  ev.evaluate_batch(pts, pos, {}, {}, {});
+  Box3 box;
+  for (const auto& p : pos)
+    if (p.allFinite()) box.extend(p);
+  return box;
+}
+
+bool parse_double(std::string_view s, double& x) {
+  const auto* end = s.data() + s.size();
+  auto [ptr, ec] = std::from_chars(s.data(), end, x);
+  return ec == std::errc() && ptr == end;
+}
+
+}  // namespace
+
+int run_info(const InfoOptions& o) {
+  ReadOptions ro;
+  ro.check_knots = false;
+  const SplineFile f = read_tbs(o.file, ro);
+  const Spline& s = f.spline;
+  const Domain& d = s.domain();
+  const int n = s.degree();
+  const KnotCheck check = check_knot_conditions(d, n, s.knots());
+
+  json j;
+  j["file"] = o.file;
+  j["degree"] = n;
+  j["units"] = f.units;
+  j["vertices"] = d.vertex_count();
+  j["triangles"] = d.triangle_count();
+  j["edges"] = d.edge_count();
+  j["control_points"] = s.control_point_count();
+  int holes = 0;
+  for (const auto& loop : d.boundary_loops()) {
+    double area = 0;
+    for (size_t i = 0; i < loop.size(); ++i) {
+      const Point2& p = d.vertex(loop[i]);
+      const Point2& q = d.vertex(loop[(i + 1) % loop.size()]);
+      area += p.x() * q.y() - p.y() * q.x();
+    }
+    if (area < 0) ++holes;
+  }
+  j["boundary_loops"] = d.boundary_loops().size();
+  j["holes"] = holes;
+  j["feature_edges"] = d.feature_edges().size();
+  const Box2 db = d.bounding_box();
+  j["domain_bbox"] = box_json(db.min, db.max);
+  Box3 net;
+  for (const auto& c : s.control_points()) net.extend(c);
+  j["control_net_bbox"] = box_json(net);
+
+  json kc;
+  kc["ok"] = check.ok();
+  kc["issues"] = json::array();
+  for (const auto& issue : check.issues) {
+    json i;
+    i["condition"] = issue.condition;
+    if (issue.triangle >= 0) i["triangle"] = issue.triangle;
+    if (issue.vertex >= 0) i["vertex"] = issue.vertex;
+    i["message"] = issue.message;
+    kc["issues"].push_back(i);
+  }
+  j["knot_conditions"] = kc;
+
+  const auto cont = edge_continuity(d, n, s.knots());
+  int smooth = n - 1;
+  json feat = json::array();
+  bool features_c0 = true;
+  for (int e = 0; e < d.edge_count(); ++e) {
+    if (d.is_feature_edge(e)) {
+      feat.push_back({{"edge", {d.edges()[e][0], d.edges()[e][1]}}, {"continuity", cont[e]}});
+      features_c0 = features_c0 && cont[e] <= 0;
+    } else {
+      smooth = std::min(smooth, cont[e]);
+    }
+  }
+  j["continuity"] = {{"smooth_edges_min", smooth},
+                     {"features_at_most_c0", features_c0},
+                     {"feature_edges", feat},
+                     {"note", "lower bounds C^k from collinear knots (METHOD.md section 3)"}};
+  if (check.ok()) j["surface_bbox"] = box_json(sampled_surface_box(s));
+  j["metadata"] = json::parse(f.metadata_json);
+
+  std::cout << j.dump(2) << "\n";
+  if (!check.ok()) {
+    std::fprintf(stderr, "tbs: error: %s: %zu knot condition(s) fail; first: %s\n", o.file.c_str(),
+                 check.issues.size(), check.issues[0].message.c_str());
+    return kInvalidInput;
+  }
+  return kOk;
+}
+
+int run_eval(const EvalOptions& o) {
+  const SplineFile f = read_tbs(o.file);
+  const std::string input_name = o.input.empty() || o.input == "-" ? "<stdin>" : o.input;
+  std::string text;
+  if (input_name == "<stdin>") {
+    text.assign(std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>());
+  } else {
+    text = read_file(o.input);
+  }
+
+  std::vector<Point2> pts;
+  std::vector<size_t> line_of;
+  size_t line = 0;
+  for (size_t pos = 0; pos < text.size();) {
+    size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    std::string_view l(text.data() + pos, end - pos);
+    pos = end + 1;
+    ++line;
+    if (!l.empty() && l.back() == '\r') l.remove_suffix(1);
+    std::vector<std::string_view> tok;
+    for (size_t i = 0; i < l.size();) {
+      while (i < l.size() && (l[i] == ' ' || l[i] == '\t' || l[i] == ',')) ++i;
+      size_t k = i;
+      while (k < l.size() && l[k] != ' ' && l[k] != '\t' && l[k] != ',') ++k;
+      if (k > i) tok.push_back(l.substr(i, k - i));
+      i = k;
+    }
+    if (tok.empty() || tok[0][0] == '#') continue;
+    double u = 0, v = 0;
+    const std::string where = input_name + ":" + std::to_string(line) + ": ";
+    if (tok.size() != 2 || !parse_double(tok[0], u) || !parse_double(tok[1], v))
+      throw InvalidInput(where + "expected two numbers \"u v\", got \"" +
+                         std::string(l.substr(0, 80)) + "\"");
+    if (!std::isfinite(u) || !std::isfinite(v))
+      throw InvalidInput(where + "coordinates must be finite numbers");
+    pts.emplace_back(u, v);
+    line_of.push_back(line);
+  }
+
+  Evaluator ev(f.spline);
+  std::vector<Point3> pos(pts.size());
+  std::vector<Vector3> du(pts.size()), dv(pts.size());
+  std::vector<uint8_t> inside(pts.size());
+  const bool need_d = o.normals || o.derivatives;
+  ev.evaluate_batch(pts, pos, need_d ? std::span<Vector3>(du) : std::span<Vector3>(),
+                    need_d ? std::span<Vector3>(dv) : std::span<Vector3>(), inside, o.threads);
+  for (size_t i = 0; i < pts.size(); ++i)
+    if (!inside[i]) {
+      char buf[160];
+      std::snprintf(buf, sizeof buf, "%s:%zu: parameter point (%.17g, %.17g) is outside the domain",
+                    input_name.c_str(), line_of[i], pts[i].x(), pts[i].y());
+      throw OutsideDomain(std::string(buf) + "; 'tbs info " + o.file + "' shows the domain_bbox");
+    }
+
+  std::string out;
+  out.reserve(pts.size() * (need_d ? 200 : 64));
+  char buf[64];
+  auto put = [&](double x, bool first) {
+    const int len = std::snprintf(buf, sizeof buf, first ? "%.17g" : " %.17g", x);
+    out.append(buf, static_cast<size_t>(len));
+  };
+  for (size_t i = 0; i < pts.size(); ++i) {
+    put(pos[i].x(), true);
+    put(pos[i].y(), false);
+    put(pos[i].z(), false);
+    if (o.normals) {
+      Vector3 nrm = du[i].cross(dv[i]);
+      const double len = nrm.norm();
+      nrm = len > 0 ? Vector3(nrm / len) : Vector3::Zero();
+      for (int k = 0; k < 3; ++k) put(nrm[k], false);
+    }
+    if (o.derivatives) {
+      for (int k = 0; k < 3; ++k) put(du[i][k], false);
+      for (int k = 0; k < 3; ++k) put(dv[i][k], false);
+    }
+    out += '\n';
+  }
+  std::fwrite(out.data(), 1, out.size(), stdout);
+  std::fflush(stdout);
+  return kOk;
+}
+
+}  // namespace tbs::cli

@@ -1,0 +1,31 @@
+#pragma once
+// The subcommands of the `tbs` command. Each returns the process exit code.
+
+#include <string>
+
+namespace tbs::cli {
+
+/// Documented exit codes (README.md, docs/cli.md).
+enum Exit : int {
+  kOk = 0,
+  kUsage = 2,         // bad command line
+  kInvalidInput = 3,  // malformed or invalid input data, point outside the domain
+  kIo = 4,            // a file cannot be read or written
+  kInternal = 5,      // a bug or an unexpected failure
+};
+
+struct InfoOptions {
+  std::string file;
+};
+int run_info(const InfoOptions& o);
+
+struct EvalOptions {
+  std::string file;
+  std::string input;  // empty or "-": stdin
+  bool normals = false;
+  bool derivatives = false;
+  int threads = 0;
+};
+int run_eval(const EvalOptions& o);
+
+}  // namespace tbs::cli

@@ -1,0 +1,101 @@
+#pragma once
+/// \file
+/// Fast evaluation of a DMS spline: value, partial and directional derivatives, normals,
+/// batches of points, and the sparse basis rows the fitter assembles its systems from.
+///
+/// The surface is evaluated through the degree n-1 form (METHOD.md section 4):
+///   F(u)   = sum_{I, |g|=n-1} M(u | V_{I,g}) * sum_j d(X_{I,g}[j <- u]) c_{I,g+e_j}
+///   D_v F  = n * sum_{I, |g|=n-1} M(u | V_{I,g}) * sum_j |d(X)| mu_j(v | X_{I,g}) c_{I,g+e_j}
+/// where the simplex splines M are the nodes of one directed acyclic graph (after Franssen et
+/// al., METHOD.md section 6): a node per distinct knot set, linked to the three knot sets of
+/// its recurrence, each evaluated at most once per point.
+
+#include <tbs/predicates.h>
+#include <tbs/spline.h>
+
+#include <memory>
+#include <optional>
+#include <span>
+#include <vector>
+
+namespace tbs {
+
+/// Sparse basis weights of one parameter point: F(u) = sum_k value[k] * c[index[k]], and
+/// likewise F_u with du, F_v with dv. Indices are ascending and unique.
+struct BasisRow {
+  std::vector<int> index;
+  std::vector<double> value, du, dv;
+  void clear() {
+    index.clear();
+    value.clear();
+    du.clear();
+    dv.clear();
+  }
+};
+
+/// Value and first partial derivatives at one point.
+struct SurfacePoint {
+  Point3 position;
+  Vector3 du;  ///< dF/du
+  Vector3 dv;  ///< dF/dv
+};
+
+/// How simplex splines are computed: through the shared graph (the default), or by plain
+/// recursion on every knot set (the baseline the benchmarks compare against).
+enum class EvalMode { Graph, Recursion };
+
+/// Evaluates one Spline. Thread-safe for concurrent const calls.
+///
+/// The evaluator keeps a reference to the spline: it must outlive the evaluator. Control
+/// points may change freely between calls; after moving knots call update_knots().
+class Evaluator {
+ public:
+  explicit Evaluator(const Spline& spline, EvalMode mode = EvalMode::Graph);
+  ~Evaluator();
+  Evaluator(Evaluator&&) noexcept;
+  Evaluator& operator=(Evaluator&&) noexcept;
+
+  /// The domain triangle that contains u under the half-open rule, or -1 outside the domain.
+  /// Points on the outer boundary belong to the triangle they lie on.
+  int locate(const Point2& u) const;
+
+  /// The perturbation used for u (METHOD.md section 7): the standard one, or for points on the
+  /// outer boundary one that points into the domain. Empty outside the domain.
+  std::optional<Perturbation> perturbation(const Point2& u) const;
+
+  /// F(u). \throw OutsideDomain if u is not in the domain.
+  Point3 value(const Point2& u) const;
+  /// F(u), F_u(u), F_v(u). \throw OutsideDomain if u is not in the domain.
+  SurfacePoint evaluate(const Point2& u) const;
+  /// The directional derivative D_dir F(u). \throw OutsideDomain.
+  Vector3 derivative(const Point2& u, const Vector2& dir) const;
+  /// The unit normal F_u x F_v / |F_u x F_v| (zero where the surface is singular).
+  /// \throw OutsideDomain.
+  Vector3 normal(const Point2& u) const;
+
+  /// Sparse basis weights of u for the value and both partial derivatives.
+  /// \return false (row cleared) if u is outside the domain.
+  bool basis_row(const Point2& u, BasisRow& row) const;
+
+  /// Evaluates many points in parallel (TBB). Output spans may be empty to skip them;
+  /// non-empty ones must have u.size() entries. Points outside the domain get NaN and
+  /// inside[i] = 0. Results do not depend on the number of threads.
+  /// \param threads maximum worker threads, 0 for all cores.
+  /// \return the number of points outside the domain.
+  size_t evaluate_batch(std::span<const Point2> u, std::span<Point3> position,
+                        std::span<Vector3> du, std::span<Vector3> dv, std::span<uint8_t> inside,
+                        int threads = 0) const;
+
+  /// Re-reads the knots of `vertex` after Spline::set_knot(): recomputes only the graph nodes
+  /// whose knot sets contain one of them, and the spatial index.
+  void update_knots(int vertex);
+
+  /// Number of distinct simplex splines in the graph.
+  size_t node_count() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace tbs

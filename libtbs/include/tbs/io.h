@@ -1,0 +1,72 @@
+#pragma once
+/// \file
+/// The native file format `.tbs` (JSON, documented in docs/format.md) and atomic file output.
+
+#include <tbs/spline.h>
+
+#include <string>
+#include <string_view>
+
+namespace tbs {
+
+/// Current version of the .tbs format written by this library.
+inline constexpr int kTbsFormatVersion = 1;
+
+/// A spline as stored in a .tbs file.
+struct SplineFile {
+  Spline spline;
+  /// Length unit of the control points: one of mm, cm, m, um, in, ft, unitless.
+  std::string units = "unitless";
+  /// Free metadata (source, fit report): the text of a JSON object.
+  std::string metadata_json = "{}";
+};
+
+struct ReadOptions {
+  /// Reject splines that violate the knot conditions (check_knot_conditions()).
+  bool check_knots = true;
+};
+
+/// Parses the text of a .tbs file. `name` is used in messages.
+/// \throw InvalidInput naming the JSON field (e.g. `domain.triangles[4][2]`) and the problem.
+SplineFile parse_tbs(std::string_view text, const std::string& name = "<memory>",
+                     const ReadOptions& options = {});
+
+/// Reads a .tbs file. \throw IoError if it cannot be read; InvalidInput as parse_tbs().
+SplineFile read_tbs(const std::string& path, const ReadOptions& options = {});
+
+/// The .tbs text of a spline. Numbers round-trip exactly.
+/// \throw InvalidInput if units or metadata are invalid.
+std::string format_tbs(const SplineFile& file);
+
+/// Writes a .tbs file atomically (see AtomicOutput). \throw IoError, InvalidInput.
+void write_tbs(const std::string& path, const SplineFile& file);
+
+/// An output file that appears only when complete: data goes to a temporary file in the same
+/// folder, commit() renames it over `path`; destruction without commit() removes it, so a
+/// failed or interrupted run never leaves a partial file nor replaces a good one.
+class AtomicOutput {
+ public:
+  /// \throw IoError if the temporary file cannot be created.
+  explicit AtomicOutput(std::string path);
+  ~AtomicOutput();
+  AtomicOutput(const AtomicOutput&) = delete;
+  AtomicOutput& operator=(const AtomicOutput&) = delete;
+
+  /// Path of the temporary file to write to.
+  const std::string& temp_path() const { return temp_; }
+  /// Renames the temporary file to the final path. \throw IoError.
+  void commit();
+
+ private:
+  std::string path_;
+  std::string temp_;
+  bool committed_ = false;
+};
+
+/// Writes `data` to `path` through an AtomicOutput. \throw IoError.
+void write_file_atomic(const std::string& path, std::string_view data);
+
+/// Reads a whole file. \throw IoError with the path and the system's reason.
+std::string read_file(const std::string& path);
+
+}  // namespace tbs

@@ -1,0 +1,97 @@
+#pragma once
+// A uniform grid over axis-aligned boxes: the spatial index behind point location and
+// basis-support lookup. Each cell lists the boxes that overlap it, so a point query returns
+// every box that may contain the point (and a few that do not).
+
+#include <tbs/types.h>
+
+#include <algorithm>
+#include <cmath>
+#include <span>
+#include <vector>
+
+namespace tbs::detail {
+
+class BoxGrid {
+ public:
+  BoxGrid() = default;
+
+  // Builds a grid of about `target_cells` cells over the union of the boxes.
+  void build(const std::vector<Box2>& boxes, size_t target_cells) {
+    extent_ = Box2{};
+    for (const auto& b : boxes)
+      if (!b.empty()) {
+        extent_.extend(b.min);
+        extent_.extend(b.max);
+      }
+    nx_ = ny_ = 1;
+    if (extent_.empty()) {
+      start_.assign(2, 0);
+      items_.clear();
+      return;
+    }
+    const Point2 ext = extent_.max - extent_.min;
+    const double w = std::max(ext.x(), 1e-300), h = std::max(ext.y(), 1e-300);
+    const double cells = static_cast<double>(std::max<size_t>(target_cells, 1));
+    const double cell = std::sqrt(w * h / cells);
+    nx_ = std::clamp(static_cast<long>(std::ceil(w / std::max(cell, 1e-300))), 1L, 4096L);
+    ny_ = std::clamp(static_cast<long>(std::ceil(h / std::max(cell, 1e-300))), 1L, 4096L);
+    sx_ = static_cast<double>(nx_) / w;
+    sy_ = static_cast<double>(ny_) / h;
+
+    std::vector<int> count(static_cast<size_t>(nx_ * ny_) + 1, 0);
+    auto each_cell = [&](const Box2& b, auto&& f) {
+      const long x0 = cx(b.min.x()), x1 = cx(b.max.x());
+      const long y0 = cy(b.min.y()), y1 = cy(b.max.y());
+      for (long y = y0; y <= y1; ++y)
+        for (long x = x0; x <= x1; ++x) f(static_cast<size_t>(y * nx_ + x));
+    };
+    for (const auto& b : boxes)
+      if (!b.empty()) each_cell(b, [&](size_t c) { ++count[c + 1]; });
+    for (size_t c = 1; c < count.size(); ++c) count[c] += count[c - 1];
+    start_ = count;
+    items_.assign(static_cast<size_t>(count.back()), -1);
+    for (int i = 0; i < static_cast<int>(boxes.size()); ++i)
+      if (!boxes[i].empty()) each_cell(boxes[i], [&](size_t c) { items_[count[c]++] = i; });
+  }
+
+  // Boxes whose cell contains p (empty if p is outside the grid).
+  std::span<const int> at(const Point2& p) const {
+    if (!(p.x() >= extent_.min.x() && p.x() <= extent_.max.x() && p.y() >= extent_.min.y() &&
+          p.y() <= extent_.max.y()))
+      return {};
+    const size_t c = static_cast<size_t>(cy(p.y()) * nx_ + cx(p.x()));
+    return {items_.data() + start_[c], items_.data() + start_[c + 1]};
+  }
+
+  // Calls f(id) for every box whose cells meet b; an id may be reported more than once.
+  template <class F>
+  void query(const Box2& b, F&& f) const {
+    if (extent_.empty() || b.max.x() < extent_.min.x() || b.min.x() > extent_.max.x() ||
+        b.max.y() < extent_.min.y() || b.min.y() > extent_.max.y())
+      return;
+    const long x0 = cx(b.min.x()), x1 = cx(b.max.x());
+    const long y0 = cy(b.min.y()), y1 = cy(b.max.y());
+    for (long y = y0; y <= y1; ++y)
+      for (long x = x0; x <= x1; ++x) {
+        const size_t c = static_cast<size_t>(y * nx_ + x);
+        for (int i = start_[c]; i < start_[c + 1]; ++i) f(items_[i]);
+      }
+  }
+
+ private:
+  long cx(double x) const {
+    return std::clamp(static_cast<long>((x - extent_.min.x()) * sx_), 0L, nx_ - 1);
+  }
+  long cy(double y) const {
+    return std::clamp(static_cast<long>((y - extent_.min.y()) * sy_), 0L, ny_ - 1);
+  }
+
+  Box2 extent_;
+  long nx_ = 1, ny_ = 1;
+  double sx_ = 1, sy_ = 1;
+  std::vector<int> start_;
+  std::vector<int> items_;
+};
+
+}  // namespace tbs::detail

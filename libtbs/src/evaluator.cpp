@@ -1,0 +1,505 @@
+#include <tbs/errors.h>
+#include <tbs/evaluator.h>
+#include <tbs/reference.h>
+#include <tbs/tolerances.h>
+
+#include "box_grid.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <unordered_map>
+
+namespace tbs {
+namespace {
+
+constexpr int kMaxKnots = tol::kMaxDegree + 2;  // top sets of the degree n-1 form
+
+// A knot set: sorted global knot ids (vertex * (n+1) + level).
+struct Key {
+  int size = 0;
+  std::array<int, kMaxKnots> id{};
+  bool operator==(const Key& o) const {
+    return size == o.size && std::equal(id.begin(), id.begin() + size, o.id.begin());
+  }
+};
+struct KeyHash {
+  size_t operator()(const Key& k) const {
+    uint64_t h = 1469598103934665603ull ^ static_cast<uint64_t>(k.size);
+    for (int i = 0; i < k.size; ++i) h = (h ^ static_cast<uint64_t>(k.id[i])) * 1099511628211ull;
+    return static_cast<size_t>(h ^ (h >> 29));
+  }
+};
+
+// One simplex spline M(u | V). Degree 0: the half-open triangle p[0] p[1] p[2]
+// (counter-clockwise) with value 1/|d|. Degree > 0: the recurrence with split set W,
+// lambda_j(u) = l0[j] + g[j] . (u - o), o = w_0.
+struct Node {
+  int degree = 0;
+  bool zero = false;  // a degenerate (all knots collinear) spline: identically 0
+  std::array<int, 3> child{-1, -1, -1};
+  std::array<int, 3> w{-1, -1, -1};  // knot ids of W (degree > 0) or of the triangle
+  std::array<Point2, 3> p;           // degree 0: triangle corners (CCW)
+  Point2 o;                          // degree > 0: origin of the lambda coefficients
+  std::array<double, 3> gx{}, gy{};  // degree > 0: gradients of lambda_j
+  double inv_area = 0;
+  Box2 box;
+};
+
+// One term of the degree n-1 form of one triangle: M(u | V_{I,g}) times
+// sum_j d(X[j <- u]) c_j, with d(X[j <- u]) = d0[j] + gx[j] (u-x0).x + gy[j] (u-x0).y.
+struct Top {
+  int node = -1;
+  std::array<int, 3> cp{};
+  Point2 x0;
+  double d = 0;  // d(X)
+  std::array<double, 3> gx{}, gy{};
+};
+
+struct Scratch {
+  std::vector<double> val;
+  std::vector<uint32_t> stamp;
+  uint32_t cur = 0;
+  void begin(size_t nodes) {
+    if (stamp.size() != nodes) {
+      stamp.assign(nodes, 0);
+      val.assign(nodes, 0.0);
+      cur = 0;
+    }
+    if (++cur == 0) {
+      std::fill(stamp.begin(), stamp.end(), 0);
+      cur = 1;
+    }
+  }
+};
+
+// Gradients of d(Y[j <- u]) for j = 0..2 with respect to u: for the cyclic triple
+// (u, b, c), d = b x c + u x (b - c).
+void affine_gradients(const std::array<Point2, 3>& y, std::array<double, 3>& gx,
+                      std::array<double, 3>& gy) {
+  for (int j = 0; j < 3; ++j) {
+    const Point2& b = y[(j + 1) % 3];
+    const Point2& c = y[(j + 2) % 3];
+    gx[j] = b.y() - c.y();
+    gy[j] = c.x() - b.x();
+  }
+}
+
+}  // namespace
+
+struct Evaluator::Impl {
+  const Spline* s;
+  EvalMode mode;
+  int n;
+  int nb;  // terms per triangle: beta_count(n - 1)
+  std::vector<Node> nodes;
+  std::vector<Key> keys;
+  std::unordered_map<Key, int, KeyHash> index;
+  std::vector<Top> tops;
+  std::vector<Box2> tri_box, support;
+  detail::BoxGrid tri_grid, support_grid;
+  std::vector<std::vector<int>> vertex_nodes;
+  mutable tbb::enumerable_thread_specific<Scratch> scratch;
+
+  Impl(const Spline& spline, EvalMode m) : s(&spline), mode(m), n(spline.degree()) { build(); }
+
+  const Point2& knot(int id) const { return s->knots()[id]; }
+  int vertex_of(int id) const { return id / (n + 1); }
+  int level_of(int id) const { return id % (n + 1); }
+
+  void build() {
+    nb = beta_count(n - 1);
+    nodes.clear();
+    keys.clear();
+    index.clear();
+    tops.clear();
+    const Domain& d = s->domain();
+    vertex_nodes.assign(d.vertex_count(), {});
+    tops.resize(static_cast<size_t>(d.triangle_count()) * nb);
+    for (int t = 0; t < d.triangle_count(); ++t) {
+      const auto& tri = d.triangle(t);
+      for (int i = 0; i < nb; ++i) {
+        const Beta g = beta_at(n - 1, i);
+        Key k;
+        for (int j = 0; j < 3; ++j)
+          for (int l = 0; l <= g[j]; ++l) k.id[k.size++] = s->knot_id(tri[j], l);
+        std::sort(k.id.begin(), k.id.begin() + k.size);
+        Top& top = tops[static_cast<size_t>(t) * nb + i];
+        top.node = get(k);
+        for (int j = 0; j < 3; ++j) {
+          Beta h = g;
+          ++h[j];
+          top.cp[j] = s->control_point_index(t, h);
+        }
+      }
+    }
+    for (int t = 0; t < d.triangle_count(); ++t) refresh_triangle(t);
+    rebuild_grids();
+  }
+
+  void refresh_triangle(int t) {
+    const auto& tri = s->domain().triangle(t);
+    for (int i = 0; i < nb; ++i) {
+      const Beta g = beta_at(n - 1, i);
+      Top& top = tops[static_cast<size_t>(t) * nb + i];
+      const std::array<Point2, 3> x{s->knot(tri[0], g[0]), s->knot(tri[1], g[1]),
+                                    s->knot(tri[2], g[2])};
+      top.x0 = x[0];
+      top.d = det3(x[0], x[1], x[2]);
+      affine_gradients(x, top.gx, top.gy);
+    }
+  }
+
+  void rebuild_grids() {
+    const Domain& d = s->domain();
+    tri_box.assign(d.triangle_count(), Box2{});
+    support.assign(d.triangle_count(), Box2{});
+    for (int t = 0; t < d.triangle_count(); ++t)
+      for (int v : d.triangle(t)) {
+        tri_box[t].extend(d.vertex(v));
+        for (int l = 0; l < n; ++l) support[t].extend(s->knot(v, l));
+      }
+    tri_grid.build(tri_box, static_cast<size_t>(d.triangle_count()));
+    support_grid.build(support, static_cast<size_t>(d.triangle_count()));
+  }
+
+  // Chooses the split set: the highest-level knot of each vertex when the set spans three
+  // vertices (an X_{I,beta}, non-degenerate under the knot conditions), otherwise the
+  // best-conditioned triple. False if every triple is degenerate.
+  bool choose_split(const Key& k, std::array<int, 3>& w) const {
+    int groups = 0;
+    for (int i = 0; i < k.size; ++i) {
+      const bool last_of_group = i + 1 == k.size || vertex_of(k.id[i + 1]) != vertex_of(k.id[i]);
+      if (last_of_group) {
+        if (groups < 3) w[groups] = k.id[i];
+        ++groups;
+      }
+    }
+    if (groups == 3 && orientation(knot(w[0]), knot(w[1]), knot(w[2])) != 0) return true;
+    double best = -1;
+    for (int a = 0; a < k.size; ++a)
+      for (int b = a + 1; b < k.size; ++b)
+        for (int c = b + 1; c < k.size; ++c) {
+          const double area = std::fabs(det3(knot(k.id[a]), knot(k.id[b]), knot(k.id[c])));
+          if (area > best) best = area, w = {k.id[a], k.id[b], k.id[c]};
+        }
+    return best >= 0 && orientation(knot(w[0]), knot(w[1]), knot(w[2])) != 0;
+  }
+
+  int get(const Key& k) {
+    if (auto it = index.find(k); it != index.end()) return it->second;
+    const int id = static_cast<int>(nodes.size());
+    nodes.emplace_back();
+    keys.push_back(k);
+    index.emplace(k, id);
+    for (int i = 0; i < k.size; ++i)
+      if (i == 0 || vertex_of(k.id[i]) != vertex_of(k.id[i - 1]))
+        vertex_nodes[vertex_of(k.id[i])].push_back(id);
+    nodes[id].degree = k.size - 3;
+    if (k.size > 3) {
+      std::array<int, 3> w;
+      if (!choose_split(k, w)) {
+        nodes[id].zero = true;
+      } else {
+        nodes[id].w = w;
+        for (int j = 0; j < 3; ++j) {
+          Key c;
+          bool skipped = false;
+          for (int i = 0; i < k.size; ++i) {
+            if (!skipped && k.id[i] == w[j]) {
+              skipped = true;
+              continue;
+            }
+            c.id[c.size++] = k.id[i];
+          }
+          const int child = get(c);
+          nodes[id].child[j] = child;
+        }
+      }
+    }
+    refresh_node(id);
+    return id;
+  }
+
+  // Recomputes the geometry of a node from the current knots. False if its split set became
+  // degenerate (the graph must then be rebuilt).
+  bool refresh_node(int id) {
+    Node& nd = nodes[id];
+    const Key& k = keys[id];
+    nd.box = Box2{};
+    for (int i = 0; i < k.size; ++i) nd.box.extend(knot(k.id[i]));
+    if (nd.degree == 0) {
+      Point2 a = knot(k.id[0]), b = knot(k.id[1]), c = knot(k.id[2]);
+      const int o = orientation(a, b, c);
+      nd.zero = o == 0;
+      if (o < 0) std::swap(b, c);
+      nd.p = {a, b, c};
+      nd.inv_area = o == 0 ? 0.0 : 1.0 / std::fabs(det3(a, b, c));
+      return true;
+    }
+    if (nd.zero) return nd.child[0] < 0 ? !non_degenerate(k) : true;
+    const std::array<Point2, 3> w{knot(nd.w[0]), knot(nd.w[1]), knot(nd.w[2])};
+    if (orientation(w[0], w[1], w[2]) == 0) return false;
+    const double dd = det3(w[0], w[1], w[2]);
+    nd.o = w[0];
+    affine_gradients(w, nd.gx, nd.gy);
+    for (int j = 0; j < 3; ++j) {
+      nd.gx[j] /= dd;
+      nd.gy[j] /= dd;
+    }
+    return true;
+  }
+
+  bool non_degenerate(const Key& k) const {
+    std::array<int, 3> w;
+    return choose_split(k, w);
+  }
+
+  double eval(int id, const Point2& u, const Perturbation& p, Scratch& sc) const {
+    if (sc.stamp[id] == sc.cur) return sc.val[id];
+    const Node& nd = nodes[id];
+    double v = 0;
+    if (!nd.zero && nd.box.contains(u)) {
+      if (nd.degree == 0) {
+        if (perturbed_orientation(nd.p[0], nd.p[1], p) > 0 &&
+            perturbed_orientation(nd.p[1], nd.p[2], p) > 0 &&
+            perturbed_orientation(nd.p[2], nd.p[0], p) > 0)
+          v = nd.inv_area;
+      } else {
+        const double dx = u.x() - nd.o.x(), dy = u.y() - nd.o.y();
+        const double l0 = 1.0 + nd.gx[0] * dx + nd.gy[0] * dy;
+        const double l1 = nd.gx[1] * dx + nd.gy[1] * dy;
+        const double l2 = nd.gx[2] * dx + nd.gy[2] * dy;
+        v = l0 * eval(nd.child[0], u, p, sc) + l1 * eval(nd.child[1], u, p, sc) +
+            l2 * eval(nd.child[2], u, p, sc);
+      }
+    }
+    sc.stamp[id] = sc.cur;
+    sc.val[id] = v;
+    return v;
+  }
+
+  double eval_recursive(int id, const Perturbation& p) const {
+    const Key& k = keys[id];
+    std::array<Point2, kMaxKnots> pts;
+    for (int i = 0; i < k.size; ++i) pts[i] = knot(k.id[i]);
+    return reference::simplex_spline(std::span<const Point2>(pts.data(), k.size), p);
+  }
+
+  std::optional<std::pair<int, Perturbation>> prepare(const Point2& u) const {
+    if (!u.allFinite()) return std::nullopt;
+    const Domain& d = s->domain();
+    const Perturbation ps = Perturbation::standard(u);
+    const auto cand = tri_grid.at(u);
+    for (int t : cand) {
+      if (!tri_box[t].contains(u)) continue;
+      const auto& tri = d.triangle(t);
+      const Point2 &a = d.vertex(tri[0]), &b = d.vertex(tri[1]), &c = d.vertex(tri[2]);
+      if (perturbed_orientation(a, b, ps) > 0 && perturbed_orientation(b, c, ps) > 0 &&
+          perturbed_orientation(c, a, ps) > 0)
+        return std::pair{t, ps};
+    }
+    // On the outer boundary the standard perturbation may leave the domain: perturb toward
+    // the centroid of a triangle the point lies on instead.
+    for (int t : cand) {
+      if (!tri_box[t].contains(u)) continue;
+      const auto& tri = d.triangle(t);
+      const Point2 &a = d.vertex(tri[0]), &b = d.vertex(tri[1]), &c = d.vertex(tri[2]);
+      if (!closed_contains_ccw(a, b, c, u)) continue;
+      const Point2 centroid = (a + b + c) / 3.0;
+      Point2 second = a;
+      double best = -1;
+      for (const Point2* v : {&a, &b, &c}) {
+        const double area = std::fabs(det3(u, centroid, *v));
+        if (area > best) best = area, second = *v;
+      }
+      return std::pair{t, Perturbation::toward(u, centroid, second)};
+    }
+    return std::nullopt;
+  }
+
+  // Calls emit(top, M) for every term of the degree n-1 form that is non-zero at u.
+  template <class Emit>
+  bool accumulate(const Point2& u, Emit&& emit) const {
+    const auto loc = prepare(u);
+    if (!loc) return false;
+    const Perturbation& p = loc->second;
+    Scratch& sc = scratch.local();
+    sc.begin(nodes.size());
+    for (int t : support_grid.at(u)) {
+      if (!support[t].contains(u)) continue;
+      const Top* row = &tops[static_cast<size_t>(t) * nb];
+      for (int i = 0; i < nb; ++i) {
+        const double m = mode == EvalMode::Graph ? eval(row[i].node, u, p, sc)
+                                                 : eval_recursive(row[i].node, p);
+        if (m != 0) emit(row[i], m);
+      }
+    }
+    return true;
+  }
+
+  bool evaluate(const Point2& u, Point3& f, Vector3& fu, Vector3& fv) const {
+    const auto& cps = s->control_points();
+    f.setZero();
+    fu.setZero();
+    fv.setZero();
+    const bool ok = accumulate(u, [&](const Top& top, double m) {
+      const double dx = u.x() - top.x0.x(), dy = u.y() - top.x0.y();
+      const Point3& c0 = cps[top.cp[0]];
+      const Point3& c1 = cps[top.cp[1]];
+      const Point3& c2 = cps[top.cp[2]];
+      const double w0 = top.d + top.gx[0] * dx + top.gy[0] * dy;
+      const double w1 = top.gx[1] * dx + top.gy[1] * dy;
+      const double w2 = top.gx[2] * dx + top.gy[2] * dy;
+      f += m * (w0 * c0 + w1 * c1 + w2 * c2);
+      fu += m * (top.gx[0] * c0 + top.gx[1] * c1 + top.gx[2] * c2);
+      fv += m * (top.gy[0] * c0 + top.gy[1] * c1 + top.gy[2] * c2);
+    });
+    fu *= n;
+    fv *= n;
+    return ok;
+  }
+};
+
+Evaluator::Evaluator(const Spline& spline, EvalMode mode)
+    : impl_(std::make_unique<Impl>(spline, mode)) {}
+Evaluator::~Evaluator() = default;
+Evaluator::Evaluator(Evaluator&&) noexcept = default;
+Evaluator& Evaluator::operator=(Evaluator&&) noexcept = default;
+
+int Evaluator::locate(const Point2& u) const {
+  const auto loc = impl_->prepare(u);
+  return loc ? loc->first : -1;
+}
+
+std::optional<Perturbation> Evaluator::perturbation(const Point2& u) const {
+  const auto loc = impl_->prepare(u);
+  if (!loc) return std::nullopt;
+  return loc->second;
+}
+
+namespace {
+[[noreturn]] void outside(const Point2& u) {
+  char buf[128];
+  std::snprintf(buf, sizeof buf, "parameter point (%.17g, %.17g) is outside the domain", u.x(),
+                u.y());
+  throw OutsideDomain(buf);
+}
+}  // namespace
+
+Point3 Evaluator::value(const Point2& u) const { return evaluate(u).position; }
+
+SurfacePoint Evaluator::evaluate(const Point2& u) const {
+  SurfacePoint r;
+  if (!impl_->evaluate(u, r.position, r.du, r.dv)) outside(u);
+  return r;
+}
+
+Vector3 Evaluator::derivative(const Point2& u, const Vector2& dir) const {
+  const SurfacePoint r = evaluate(u);
+  return dir.x() * r.du + dir.y() * r.dv;
+}
+
+Vector3 Evaluator::normal(const Point2& u) const {
+  const SurfacePoint r = evaluate(u);
+  const Vector3 c = r.du.cross(r.dv);
+  const double len = c.norm();
+  return len > 0 ? Vector3(c / len) : Vector3::Zero();
+}
+
+bool Evaluator::basis_row(const Point2& u, BasisRow& row) const {
+  row.clear();
+  struct Entry {
+    int index;
+    double v, du, dv;
+  };
+  thread_local std::vector<Entry> entries;
+  entries.clear();
+  const int n = impl_->n;
+  const bool ok = impl_->accumulate(u, [&](const Top& top, double m) {
+    const double dx = u.x() - top.x0.x(), dy = u.y() - top.x0.y();
+    const double w[3] = {top.d + top.gx[0] * dx + top.gy[0] * dy, top.gx[1] * dx + top.gy[1] * dy,
+                         top.gx[2] * dx + top.gy[2] * dy};
+    for (int j = 0; j < 3; ++j)
+      entries.push_back({top.cp[j], m * w[j], n * m * top.gx[j], n * m * top.gy[j]});
+  });
+  if (!ok) return false;
+  std::sort(entries.begin(), entries.end(),
+            [](const Entry& a, const Entry& b) { return a.index < b.index; });
+  for (const Entry& e : entries) {
+    if (!row.index.empty() && row.index.back() == e.index) {
+      row.value.back() += e.v;
+      row.du.back() += e.du;
+      row.dv.back() += e.dv;
+    } else {
+      row.index.push_back(e.index);
+      row.value.push_back(e.v);
+      row.du.push_back(e.du);
+      row.dv.push_back(e.dv);
+    }
+  }
+  return true;
+}
+
+size_t Evaluator::evaluate_batch(std::span<const Point2> u, std::span<Point3> position,
+                                 std::span<Vector3> du, std::span<Vector3> dv,
+                                 std::span<uint8_t> inside, int threads) const {
+  const size_t count = u.size();
+  auto check = [count](size_t size, const char* name) {
+    if (size != 0 && size != count)
+      throw InvalidInput(std::string("evaluate_batch: output '") + name + "' has " +
+                         std::to_string(size) + " entries for " + std::to_string(count) +
+                         " points");
+  };
+  check(position.size(), "position");
+  check(du.size(), "du");
+  check(dv.size(), "dv");
+  check(inside.size(), "inside");
+  std::vector<uint8_t> own;
+  if (inside.empty()) {
+    own.resize(count);
+    inside = own;
+  }
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto body = [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      Point3 f;
+      Vector3 fu, fv;
+      const bool ok = impl_->evaluate(u[i], f, fu, fv);
+      if (!ok) f = fu = fv = Vector3::Constant(nan);
+      inside[i] = ok ? 1 : 0;
+      if (!position.empty()) position[i] = f;
+      if (!du.empty()) du[i] = fu;
+      if (!dv.empty()) dv[i] = fv;
+    }
+  };
+  const tbb::blocked_range<size_t> range(0, count, 256);
+  if (threads > 0) {
+    tbb::task_arena arena(threads);
+    arena.execute([&] { tbb::parallel_for(range, body); });
+  } else {
+    tbb::parallel_for(range, body);
+  }
+  return static_cast<size_t>(std::count(inside.begin(), inside.end(), 0));
+}
+
+void Evaluator::update_knots(int vertex) {
+  Impl& m = *impl_;
+  bool ok = true;
+  for (int id : m.vertex_nodes[vertex]) ok = m.refresh_node(id) && ok;
+  if (!ok) {
+    m.build();
+    return;
+  }
+  for (int t : m.s->domain().vertex_triangles(vertex)) m.refresh_triangle(t);
+  m.rebuild_grids();
+}
+
+size_t Evaluator::node_count() const { return impl_->nodes.size(); }
+
+}  // namespace tbs

@@ -1,0 +1,179 @@
+// The `tbs` command as a user runs it: exit codes, messages, output.
+
+#include <tbs/evaluator.h>
+#include <tbs/io.h>
+
+#include "random_spline.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <sys/wait.h>
+
+namespace tbs {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+struct Result {
+  int code;
+  std::string out, err;
+};
+
+fs::path temp_dir() {
+  const fs::path p = fs::temp_directory_path() / ("tbs_cli_test_" + std::to_string(::getpid()));
+  fs::create_directories(p);
+  return p;
+}
+
+Result run(const std::string& args, const std::string& stdin_text = "") {
+  const fs::path dir = temp_dir();
+  const fs::path in = dir / "stdin.txt", out = dir / "stdout.txt", err = dir / "stderr.txt";
+  std::ofstream(in) << stdin_text;
+  const std::string cmd = std::string(TBS_EXE) + " " + args + " < '" + in.string() + "' > '" +
+                          out.string() + "' 2> '" + err.string() + "'";
+  const int status = std::system(cmd.c_str());
+  Result r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_file(out.string()), read_file(err.string())};
+  return r;
+}
+
+std::string sample_path() { return std::string(TBS_SOURCE_DIR) + "/samples/wave.tbs"; }
+
+TEST(Cli, BundledSampleIsReproducibleFromItsGenerator) {
+  const fs::path out = temp_dir() / "wave.tbs";
+  const std::string cmd = std::string(TBS_MAKE_SAMPLE_EXE) + " '" + out.string() + "'";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  EXPECT_EQ(read_file(out.string()), read_file(sample_path()));
+}
+
+TEST(Cli, InfoReportsTheSample) {
+  const Result r = run("info '" + sample_path() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json j = json::parse(r.out);
+  const SplineFile f = read_tbs(sample_path());
+  EXPECT_EQ(j["degree"], f.spline.degree());
+  EXPECT_EQ(j["triangles"], f.spline.domain().triangle_count());
+  EXPECT_EQ(j["vertices"], f.spline.domain().vertex_count());
+  EXPECT_EQ(j["control_points"], f.spline.control_point_count());
+  EXPECT_EQ(j["holes"], 1);
+  EXPECT_TRUE(j["knot_conditions"]["ok"].get<bool>());
+  EXPECT_TRUE(j["continuity"]["features_at_most_c0"].get<bool>());
+  EXPECT_EQ(j["continuity"]["smooth_edges_min"], f.spline.degree() - 1);
+  EXPECT_EQ(j["units"], "mm");
+  EXPECT_GT(j["surface_bbox"]["max"][0].get<double>(), 150.0);
+}
+
+TEST(Cli, EvalMatchesTheLibraryBitForBit) {
+  const SplineFile f = read_tbs(sample_path());
+  const Evaluator ev(f.spline);
+  const auto pts = test::random_domain_points(f.spline.domain(), 200, 3);
+  std::ostringstream in;
+  in.precision(17);
+  in << "# u v\n\n";
+  for (const auto& p : pts) in << p.x() << " " << p.y() << "\n";
+  const Result r = run("eval '" + sample_path() + "' --normals --derivatives", in.str());
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::istringstream out(r.out);
+  std::string line;
+  size_t i = 0;
+  while (std::getline(out, line)) {
+    std::istringstream ls(line);
+    std::vector<double> v;
+    double x;
+    while (ls >> x) v.push_back(x);
+    ASSERT_EQ(v.size(), 12u) << line;
+    ASSERT_LT(i, pts.size());
+    // Re-parse the input as the command did.
+    std::ostringstream p;
+    p.precision(17);
+    p << pts[i].x() << " " << pts[i].y();
+    std::istringstream ps(p.str());
+    Point2 u;
+    ps >> u.x() >> u.y();
+    const SurfacePoint s = ev.evaluate(u);
+    EXPECT_EQ(v[0], s.position.x());
+    EXPECT_EQ(v[1], s.position.y());
+    EXPECT_EQ(v[2], s.position.z());
+    EXPECT_EQ(v[6], s.du.x());
+    EXPECT_EQ(v[11], s.dv.z());
+    EXPECT_NEAR(Vector3(v[3], v[4], v[5]).dot(ev.normal(u)), 1.0, 1e-15);
+    ++i;
+  }
+  EXPECT_EQ(i, pts.size());
+}
+
+TEST(Cli, EvalFromFileWithPlainOutput) {
+  const fs::path in = temp_dir() / "pts.txt";
+  std::ofstream(in) << "0.1 0.1\n0.5,0.25\n";
+  const Result r = run("eval '" + sample_path() + "' --input '" + in.string() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 2);
+}
+
+TEST(Cli, PointOutsideTheDomainNamesItsLine) {
+  const Result r = run("eval '" + sample_path() + "'", "0.1 0.1\n0.2 0.2\n# comment\n5 5\n");
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("<stdin>:4:"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("outside the domain"), std::string::npos) << r.err;
+  EXPECT_TRUE(r.out.empty());
+  // Inside the hole of the sample.
+  const Result h = run("eval '" + sample_path() + "'", "1.45 0.5\n");
+  EXPECT_EQ(h.code, 3) << h.err;
+}
+
+TEST(Cli, MalformedPointLine) {
+  const Result r = run("eval '" + sample_path() + "'", "0.1 0.1\n0.2 abc\n");
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("<stdin>:2:"), std::string::npos) << r.err;
+  const Result nan = run("eval '" + sample_path() + "'", "nan 0.1\n");
+  EXPECT_EQ(nan.code, 3) << nan.err;
+}
+
+TEST(Cli, ExitCodes) {
+  EXPECT_EQ(run("").code, 2);
+  EXPECT_EQ(run("frobnicate").code, 2);
+  EXPECT_EQ(run("eval").code, 2);
+  EXPECT_EQ(run("eval '" + sample_path() + "' --bogus").code, 2);
+  EXPECT_EQ(run("eval '" + sample_path() + "' --threads -3").code, 2);
+  for (const char* c : {"--help", "info --help", "eval --help", "--version"}) {
+    const Result r = run(c);
+    EXPECT_EQ(r.code, 0) << c;
+    EXPECT_FALSE(r.out.empty()) << c;
+  }
+  const Result missing = run("info /nonexistent.tbs");
+  EXPECT_EQ(missing.code, 4);
+  EXPECT_NE(missing.err.find("/nonexistent.tbs"), std::string::npos);
+  const fs::path bad = temp_dir() / "bad.tbs";
+  std::ofstream(bad) << "{\"format\": \"tbs\", \"version\": 1";
+  const Result r = run("info '" + bad.string() + "'");
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("truncated"), std::string::npos) << r.err;
+  EXPECT_EQ(run("eval '" + bad.string() + "'", "0 0\n").code, 3);
+}
+
+TEST(Cli, InfoOnInvalidKnotsReportsAndFails) {
+  json j = json::parse(read_file(sample_path()));
+  const auto& tri = j["domain"]["triangles"][0];
+  const auto b = j["domain"]["vertices"][tri[1].get<int>()];
+  const auto c = j["domain"]["vertices"][tri[2].get<int>()];
+  j["sub_knots"][tri[0].get<int>()][1] = {0.5 * (b[0].get<double>() + c[0].get<double>()),
+                                          0.5 * (b[1].get<double>() + c[1].get<double>())};
+  const fs::path bad = temp_dir() / "knots.tbs";
+  std::ofstream(bad) << j.dump();
+  const Result r = run("info '" + bad.string() + "'");
+  EXPECT_EQ(r.code, 3);
+  const json out = json::parse(r.out);
+  EXPECT_FALSE(out["knot_conditions"]["ok"].get<bool>());
+  EXPECT_FALSE(out["knot_conditions"]["issues"].empty());
+  const Result e = run("eval '" + bad.string() + "'", "0.1 0.1\n");
+  EXPECT_EQ(e.code, 3);
+  EXPECT_NE(e.err.find("knot conditions"), std::string::npos) << e.err;
+}
+
+}  // namespace
+}  // namespace tbs

@@ -1,0 +1,197 @@
+#include <tbs/errors.h>
+#include <tbs/evaluator.h>
+#include <tbs/reference.h>
+
+#include "random_spline.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+namespace tbs {
+namespace {
+
+test::GridOptions grid(bool hole = false) {
+  test::GridOptions o;
+  o.nx = o.ny = 6;
+  o.hole = hole;
+  return o;
+}
+
+class Eval : public ::testing::TestWithParam<int> {};
+
+TEST_P(Eval, GraphMatchesPlainRecursionAndTheReference) {
+  const int n = GetParam();
+  const Spline s = test::random_spline(n, grid(true), 11);
+  const Evaluator graph(s), plain(s, EvalMode::Recursion);
+  const auto pts = test::random_domain_points(s.domain(), 2000, 3);
+  const Vector2 du(1, 0), dv(0, 1);
+  for (size_t i = 0; i < pts.size(); ++i) {
+    const SurfacePoint a = graph.evaluate(pts[i]);
+    const SurfacePoint b = plain.evaluate(pts[i]);
+    ASSERT_LT((a.position - b.position).norm(), 1e-11);
+    ASSERT_LT((a.du - b.du).norm(), 1e-9);
+    ASSERT_LT((a.dv - b.dv).norm(), 1e-9);
+    if (i % 10 == 0) {
+      const auto p = *graph.perturbation(pts[i]);
+      ASSERT_LT((a.position - reference::derivative(s, {}, p)).norm(), 1e-11);
+      ASSERT_LT((a.du - reference::derivative(s, std::span(&du, 1), p)).norm(), 1e-9);
+      ASSERT_LT((a.dv - reference::derivative(s, std::span(&dv, 1), p)).norm(), 1e-9);
+    }
+  }
+}
+
+TEST_P(Eval, PartialDerivativesMatchCentralDifferencesWithH2Convergence) {
+  const int n = GetParam();
+  const Spline s = test::random_spline(n, grid(), 12);
+  const Evaluator ev(s);
+  const auto pts = test::random_domain_points(s.domain(), 300, 4);
+  std::vector<double> ratios;
+  for (const auto& u : pts) {
+    // Stay away from the boundary so the stencil stays in the domain.
+    if ((u.array() < 0.05).any() || (u.array() > 0.95).any()) continue;
+    const SurfacePoint f = ev.evaluate(u);
+    for (int axis = 0; axis < 2; ++axis) {
+      const Vector2 e = axis == 0 ? Vector2(1, 0) : Vector2(0, 1);
+      const Vector3 exact = axis == 0 ? f.du : f.dv;
+      auto fd = [&](double h) { return Vector3((ev.value(u + h * e) - ev.value(u - h * e)) / (2 * h)); };
+      const double small = (fd(1e-6) - exact).norm();
+      ASSERT_LT(small, 1e-6 * (1 + exact.norm())) << u.transpose();
+      if (n >= 3) {
+        const double e1 = (fd(4e-3) - exact).norm(), e2 = (fd(2e-3) - exact).norm();
+        if (e1 > 1e-9) ratios.push_back(e1 / e2);
+      }
+    }
+  }
+  if (n >= 3) {
+    ASSERT_GT(ratios.size(), 100u);
+    std::nth_element(ratios.begin(), ratios.begin() + ratios.size() / 2, ratios.end());
+    const double median = ratios[ratios.size() / 2];
+    EXPECT_GT(median, 3.5);
+    EXPECT_LT(median, 4.5);
+  }
+}
+
+TEST_P(Eval, DirectionalDerivativeAndNormal) {
+  const int n = GetParam();
+  const Spline s = test::random_spline(n, grid(), 13);
+  const Evaluator ev(s);
+  for (const auto& u : test::random_domain_points(s.domain(), 200, 5)) {
+    const SurfacePoint f = ev.evaluate(u);
+    const Vector2 dir(0.3, -1.7);
+    EXPECT_LT((ev.derivative(u, dir) - (0.3 * f.du - 1.7 * f.dv)).norm(), 1e-12);
+    const Vector3 nrm = ev.normal(u);
+    EXPECT_NEAR(nrm.norm(), 1.0, 1e-12);
+    EXPECT_NEAR(nrm.dot(f.du), 0.0, 1e-9);
+    EXPECT_NEAR(nrm.dot(f.dv), 0.0, 1e-9);
+    EXPECT_GT(nrm.dot(f.du.cross(f.dv)), 0);
+  }
+}
+
+TEST_P(Eval, BatchIsIndependentOfThreadCount) {
+  const int n = GetParam();
+  const Spline s = test::random_spline(n, grid(true), 14);
+  const Evaluator ev(s);
+  auto pts = test::random_domain_points(s.domain(), 20000, 6);
+  pts.emplace_back(0.5, 0.5);  // in the hole
+  pts.emplace_back(2.0, 0.5);  // outside
+  std::vector<Point3> p1(pts.size()), p2(pts.size()), p0(pts.size());
+  std::vector<Vector3> u1(pts.size()), u2(pts.size()), v1(pts.size()), v2(pts.size());
+  std::vector<uint8_t> in1(pts.size()), in2(pts.size());
+  EXPECT_EQ(ev.evaluate_batch(pts, p1, u1, v1, in1, 1), 2u);
+  EXPECT_EQ(ev.evaluate_batch(pts, p2, u2, v2, in2, 2), 2u);
+  EXPECT_EQ(ev.evaluate_batch(pts, p0, {}, {}, {}, 0), 2u);
+  for (size_t i = 0; i + 2 < pts.size(); ++i) {
+    ASSERT_EQ(in1[i], 1);
+    ASSERT_EQ(p1[i], p2[i]);
+    ASSERT_EQ(p1[i], p0[i]);
+    ASSERT_EQ(u1[i], u2[i]);
+    ASSERT_EQ(v1[i], v2[i]);
+    if (i % 97 == 0) {
+      ASSERT_EQ(p1[i], ev.value(pts[i]));
+    }
+  }
+  EXPECT_EQ(in1[pts.size() - 1], 0);
+  EXPECT_EQ(in1[pts.size() - 2], 0);
+  EXPECT_TRUE(std::isnan(p1.back().x()));
+}
+
+INSTANTIATE_TEST_SUITE_P(Degrees, Eval, ::testing::Values(1, 2, 3, 4, 5, 6));
+
+TEST(Evaluator, OutsideTheDomainAndInTheHole) {
+  const Spline s = test::random_spline(3, grid(true), 15);
+  const Evaluator ev(s);
+  EXPECT_EQ(ev.locate({0.5, 0.5}), -1);
+  EXPECT_EQ(ev.locate({-0.1, 0.5}), -1);
+  EXPECT_EQ(ev.locate({1.0 + 1e-15, 0.5}), -1);
+  EXPECT_EQ(ev.locate({std::nan(""), 0.5}), -1);
+  EXPECT_THROW(ev.value({0.5, 0.5}), OutsideDomain);
+  EXPECT_THROW(ev.normal({3, 3}), OutsideDomain);
+  BasisRow row;
+  EXPECT_FALSE(ev.basis_row({0.5, 0.5}, row));
+  EXPECT_TRUE(row.index.empty());
+}
+
+// Points on the outer boundary and the hole's boundary evaluate to the limit from inside.
+TEST(Evaluator, BoundaryPointsAreLimitsFromInside) {
+  const Spline s = test::random_spline(3, grid(true), 16);
+  const Evaluator ev(s);
+  const Domain& d = s.domain();
+  int checked = 0;
+  for (const auto& loop : d.boundary_loops())
+    for (size_t i = 0; i < loop.size(); ++i) {
+      const Point2 a = d.vertex(loop[i]), b = d.vertex(loop[(i + 1) % loop.size()]);
+      for (const Point2& u : {a, Point2(0.5 * (a + b))}) {
+        ASSERT_GE(ev.locate(u), 0) << u.transpose();
+        const Vector2 inward = Vector2(-(b - a).y(), (b - a).x()).normalized();
+        const Vector2 along = (b - a).normalized();
+        const Point2 q = u + 1e-7 * inward + 1e-8 * along;
+        ASSERT_GE(ev.locate(q), 0);
+        EXPECT_LT((ev.value(u) - ev.value(q)).norm(), 1e-5) << u.transpose();
+        ++checked;
+      }
+    }
+  EXPECT_GT(checked, 40);
+}
+
+TEST(Evaluator, UpdateKnotsEqualsAFreshEvaluator) {
+  Spline s = test::random_spline(3, grid(), 17);
+  Evaluator ev(s);
+  const auto pts = test::random_domain_points(s.domain(), 500, 7);
+  // Move the sub-knots of an interior vertex a little (they stay valid).
+  int v = -1;
+  for (int i = 0; i < s.domain().vertex_count() && v < 0; ++i)
+    if (!s.domain().is_boundary_vertex(i)) v = i;
+  for (int l = 0; l <= 3; ++l) {
+    const Point2 delta = l == 0 ? Point2(0.004, -0.003) : Point2(0.001 * l, 0.0005);
+    s.set_knot(v, l, s.knot(v, l) + delta);
+  }
+  ev.update_knots(v);
+  const Evaluator fresh(s);
+  for (const auto& u : pts) {
+    if (fresh.locate(u) < 0) continue;
+    EXPECT_LT((ev.value(u) - fresh.value(u)).norm(), 1e-14);
+  }
+}
+
+TEST(Evaluator, ControlPointsAreReadAtEachCall) {
+  Spline s = test::random_spline(2, grid(), 18);
+  const Evaluator ev(s);
+  const Point2 u(0.31, 0.47);
+  const Point3 before = ev.value(u);
+  for (auto& c : s.control_points()) c += Point3(1, 2, 3);
+  EXPECT_LT((ev.value(u) - (before + Point3(1, 2, 3))).norm(), 1e-12);
+}
+
+TEST(Evaluator, GraphSharesNodes) {
+  const Spline s = test::random_spline(4, grid(), 19);
+  const Evaluator ev(s);
+  // Plain recursion visits 1 + 3 + 9 + 27 sets per degree-3 top set; the graph stores each
+  // distinct set once.
+  const size_t tree = static_cast<size_t>(s.domain().triangle_count()) * beta_count(3) * 40;
+  EXPECT_LT(ev.node_count() * 3, tree);
+}
+
+}  // namespace
+}  // namespace tbs
