@@ -1,0 +1,39 @@
+# Shared by scripts/test.sh and scripts/demo.sh: the Debian packages tbs needs, installed when
+# missing. Source it, then call `tbs_install_deps [extra packages...]`.
+
+TBS_PACKAGES=(
+  build-essential cmake pkg-config
+  libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev
+  libtbb-dev nlohmann-json3-dev libcli11-dev
+)
+TBS_TEST_PACKAGES=(libgtest-dev libgmock-dev libbenchmark-dev python3 python3-jsonschema)
+
+tbs_install_deps() {
+  local wanted=("${TBS_PACKAGES[@]}" "$@") missing=() p
+  for p in "${wanted[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  [ ${#missing[@]} -eq 0 ] && return 0
+  if [ "$(id -u)" -ne 0 ]; then
+    echo "tbs: missing Debian packages. Install them with:" >&2
+    echo "  sudo apt-get update && sudo apt-get install -y ${missing[*]}" >&2
+    exit 1
+  fi
+  echo "tbs: installing ${missing[*]}" >&2
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+}
+
+# Configures (Release) and builds the given targets (all when none) in build/.
+tbs_build() {
+  local root jobs
+  root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+  jobs="$(nproc 2>/dev/null || echo 2)"
+  cmake -S "$root" -B "$root/build" -DCMAKE_BUILD_TYPE=Release >/dev/null
+  if [ $# -eq 0 ]; then
+    cmake --build "$root/build" --parallel "$jobs"
+  else
+    cmake --build "$root/build" --parallel "$jobs" --target "$@"
+  fi
+}
