@@ -16,7 +16,7 @@
 namespace tbs::cli {
 namespace {
 
-using json = nlohmann::json;
+using json = nlohmann::ordered_json;
 
 json box_json(const Point2& lo, const Point2& hi) {
   return {{"min", {lo.x(), lo.y()}}, {"max", {hi.x(), hi.y()}}};

@@ -12,14 +12,17 @@ out=${TBS_DEMO_OUT:-out/demo}
 mkdir -p "$out"
 
 echo "== tbs info $sample"
-"$tbs" info "$sample" | tee "$out/info.json" | head -n 20
+"$tbs" info "$sample" > "$out/info.json"
+grep -E "^  \"(degree|units|vertices|triangles|edges|control_points|boundary_loops|holes|feature_edges)\"" "$out/info.json"
+echo "  knot conditions:$(grep -m1 '"ok"' "$out/info.json" | sed 's/.*"ok"//; s/,$//')"
+echo "  continuity (lower bounds):$(grep -E '"(smooth_edges_min|features_at_most_c0)"' "$out/info.json" | tr -d '\n' | tr -s ' ')"
 echo "   (full report: $out/info.json)"
 
 # A 201 x 101 grid over the domain's bounding box, keeping the points inside the domain.
-python_free_grid() {
+uv_grid() {
   awk 'BEGIN { for (j = 0; j <= 100; j++) for (i = 0; i <= 200; i++) printf "%.6f %.6f\n", 2*i/200, j/100 }'
 }
-python_free_grid > "$out/grid.uv"
+uv_grid > "$out/grid.uv"
 # Points in the hole are outside the domain: drop them (u in (1.25, 1.625), v in (0.375, 0.625)).
 awk '!($1 > 1.25 && $1 < 1.625 && $2 > 0.375 && $2 < 0.625)' "$out/grid.uv" > "$out/points.uv"
 
