@@ -14,7 +14,7 @@ mkdir -p "$out"
 echo "== tbs info $sample"
 "$tbs" info "$sample" > "$out/info.json"
 grep -E "^  \"(degree|units|vertices|triangles|edges|control_points|boundary_loops|holes|feature_edges)\"" "$out/info.json"
-echo "  knot conditions:$(grep -m1 '"ok"' "$out/info.json" | sed 's/.*"ok"//; s/,$//')"
+echo "  knot conditions:$(grep -m1 '"ok"' "$out/info.json" | sed 's/.*"ok": *//; s/,$//')"
 echo "  continuity (lower bounds):$(grep -E '"(smooth_edges_min|features_at_most_c0)"' "$out/info.json" | tr -d '\n' | tr -s ' ')"
 echo "   (full report: $out/info.json)"
 
