@@ -86,6 +86,13 @@ struct Reader {
   }
 };
 
+// Error text may quote bytes of a binary file: keep messages printable on any terminal.
+std::string printable(std::string s) {
+  for (char& c : s)
+    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
+  return s;
+}
+
 std::string idx(const std::string& path, size_t i) { return path + "[" + std::to_string(i) + "]"; }
 
 void pretty(const json& j, std::string& out, int indent) {
@@ -125,12 +132,12 @@ SplineFile parse_tbs(std::string_view text, const std::string& name, const ReadO
   } catch (const json::parse_error& e) {
     std::string what = e.what();
     if (auto p = what.find("] "); p != std::string::npos) what = what.substr(p + 2);
-    throw InvalidInput(name + ": not valid JSON: " + what +
+    throw InvalidInput(name + ": not valid JSON: " + printable(what) +
                        (e.byte >= text.size() ? " (the file looks truncated)" : ""));
   } catch (const json::exception& e) {
     std::string what = e.what();
     if (auto p = what.find("] "); p != std::string::npos) what = what.substr(p + 2);
-    throw InvalidInput(name + ": not valid JSON: " + what);
+    throw InvalidInput(name + ": not valid JSON: " + printable(what));
   }
   if (!j.is_object()) r.fail("(top level)", std::string("expected a JSON object, got ") + j.type_name());
 

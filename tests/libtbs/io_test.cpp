@@ -146,7 +146,10 @@ TEST(Io, RejectsBrokenJsonText) {
       parse_tbs(t, "broken.tbs");
       ADD_FAILURE() << "accepted: " << t.substr(0, 40);
     } catch (const InvalidInput& e) {
-      EXPECT_NE(std::string(e.what()).find(expect), std::string::npos) << e.what();
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find(expect), std::string::npos) << msg;
+      for (char ch : msg)
+        EXPECT_TRUE(ch >= 0x20 && ch < 0x7f) << "unprintable byte in: " << msg;
     }
   }
 }
