@@ -12,8 +12,9 @@
 
 int main(int argc, char** argv) {
   using namespace tbs::cli;
-  CLI::App app{"tbs " TBS_VERSION ": fits triangular B-spline (DMS spline) surfaces to 3D scans "
-               "and exports them for CAD.\n"
+  CLI::App app{"tbs " TBS_VERSION ": triangular B-spline (DMS spline) surfaces from 3D scans, "
+               "for CAD.\nThis version inspects and evaluates .tbs splines; fitting and CAD export "
+               "are not available yet.\n"
                "Exit codes: 0 ok, 2 bad usage, 3 invalid input, 4 file I/O error, 5 internal error."};
   app.set_version_flag("--version", "tbs " TBS_VERSION);
   app.require_subcommand(1);
