@@ -129,15 +129,13 @@ SplineFile parse_tbs(std::string_view text, const std::string& name, const ReadO
   json j;
   try {
     j = json::parse(text.begin(), text.end());
-  } catch (const json::parse_error& e) {
-    std::string what = e.what();
-    if (auto p = what.find("] "); p != std::string::npos) what = what.substr(p + 2);
-    throw InvalidInput(name + ": not valid JSON: " + printable(what) +
-                       (e.byte >= text.size() ? " (the file looks truncated)" : ""));
   } catch (const json::exception& e) {
+    // nlohmann prefixes "[json.exception.<kind>.<id>] "; keep the readable part.
     std::string what = e.what();
     if (auto p = what.find("] "); p != std::string::npos) what = what.substr(p + 2);
-    throw InvalidInput(name + ": not valid JSON: " + printable(what));
+    const auto* pe = dynamic_cast<const json::parse_error*>(&e);
+    throw InvalidInput(name + ": not valid JSON: " + printable(what) +
+                       (pe && pe->byte >= text.size() ? " (the file looks truncated)" : ""));
   }
   if (!j.is_object()) r.fail("(top level)", std::string("expected a JSON object, got ") + j.type_name());
 
