@@ -2,12 +2,17 @@
 
 #include <tbs/errors.h>
 #include <tbs/evaluator.h>
+#include <tbs/fit.h>
+#include <tbs/scan.h>
 #include <tbs/io.h>
 #include <tbs/knots.h>
 
 #include <nlohmann/json.hpp>
 
+#include <unistd.h>
+
 #include <charconv>
+#include <filesystem>
 #include <cstdio>
 #include <iostream>
 #include <iterator>
@@ -212,6 +217,65 @@ int run_eval(const EvalOptions& o) {
   }
   std::fwrite(out.data(), 1, out.size(), stdout);
   std::fflush(stdout);
+  return kOk;
+}
+
+}  // namespace tbs::cli
+
+namespace tbs::cli {
+
+int run_fit(const FitCommandOptions& o) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::exists(o.output, ec) && fs::exists(o.input, ec) && fs::equivalent(o.input, o.output, ec))
+    throw InvalidInput(o.output + ": the output would overwrite the input; choose another -o path");
+  const bool tty = isatty(fileno(stderr)) != 0;
+  auto say = [&](const std::string& line) {
+    if (o.quiet) return;
+    if (tty)
+      std::fprintf(stderr, "\r\033[K%s", line.c_str());
+    else
+      std::fprintf(stderr, "%s\n", line.c_str());
+    std::fflush(stderr);
+  };
+
+  say("tbs fit: reading " + o.input);
+  const Scan scan = read_scan(o.input);
+  FitOptions fo;
+  fo.degree = o.degree;
+  fo.tolerance = o.tolerance;
+  fo.tolerance_abs = o.tolerance_abs;
+  fo.triangles = o.triangles;
+  fo.fairness = o.fairness;
+  fo.feature_angle = o.feature_angle;
+  fo.features = !o.no_features;
+  fo.max_control_points = o.max_control_points;
+  fo.max_iterations = o.max_iterations;
+  fo.knot_sweeps = o.knot_sweeps;
+  fo.threads = o.threads;
+  fo.progress = [&](const FitProgress& p) { say("tbs fit: [" + p.stage + "] " + p.message); };
+  const FitResult r = fit(scan, fo);
+  if (tty && !o.quiet) std::fprintf(stderr, "\n");
+
+  const FitReport& rep = r.report;
+  json meta;
+  meta["source"] = fs::path(o.input).filename().string();
+  meta["fit"] = json::parse(rep.to_json(false));
+  SplineFile file{r.spline, o.units, meta.dump()};
+  write_tbs(o.output, file);
+  if (!o.report.empty()) write_file_atomic(o.report, rep.to_json(true) + "\n");
+
+  std::printf("%-18s %s\n", "input", o.input.c_str());
+  std::printf("%-18s %s\n", "output", o.output.c_str());
+  std::printf("%-18s %zu\n", "points", rep.points);
+  std::printf("%-18s %d\n", "degree", rep.degree);
+  std::printf("%-18s %d\n", "domain triangles", rep.domain_triangles);
+  std::printf("%-18s %d\n", "control points", rep.control_points);
+  std::printf("%-18s %.3e (%.4g %s)\n", "max error", rep.max_error, rep.max_error_abs, o.units.c_str());
+  std::printf("%-18s %.3e (%.4g %s)\n", "RMS error", rep.rms_error, rep.rms_error_abs, o.units.c_str());
+  std::printf("%-18s %.3e (%.4g %s)\n", "tolerance", rep.tolerance, rep.tolerance_abs, o.units.c_str());
+  std::printf("%-18s %s (%s)\n", "converged", rep.converged ? "yes" : "no", rep.stop_reason.c_str());
+  std::printf("%-18s %.2f s\n", "time", rep.seconds);
   return kOk;
 }
 

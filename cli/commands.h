@@ -28,4 +28,24 @@ struct EvalOptions {
 };
 int run_eval(const EvalOptions& o);
 
+struct FitCommandOptions {
+  std::string input;
+  std::string output;
+  std::string report;  // empty: none
+  std::string units = "unitless";
+  int degree = 3;
+  double tolerance = 1e-3;
+  double tolerance_abs = 0;
+  int triangles = 0;
+  double fairness = 1e-5;
+  double feature_angle = 40;
+  bool no_features = false;
+  int max_control_points = 0;
+  int max_iterations = 25;
+  int knot_sweeps = 1;
+  int threads = 0;
+  bool quiet = false;
+};
+int run_fit(const FitCommandOptions& o);
+
 }  // namespace tbs::cli

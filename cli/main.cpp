@@ -13,8 +13,8 @@
 int main(int argc, char** argv) {
   using namespace tbs::cli;
   CLI::App app{"tbs " TBS_VERSION ": triangular B-spline (DMS spline) surfaces from 3D scans, "
-               "for CAD.\nThis version inspects and evaluates .tbs splines; fitting and CAD export "
-               "are not available yet.\n"
+               "for CAD.\nThis version fits splines to scans whose points carry parameters (u, v), "
+               "inspects and evaluates .tbs splines; CAD export is not available yet.\n"
                "Exit codes: 0 ok, 2 bad usage, 3 invalid input, 4 file I/O error, 5 internal error."};
   app.set_version_flag("--version", "tbs " TBS_VERSION);
   app.require_subcommand(1);
@@ -38,6 +38,51 @@ int main(int argc, char** argv) {
   eval_cmd->add_option("--threads,-t", eval.threads, "Worker threads (0 = all cores)")
       ->check(CLI::NonNegativeNumber);
 
+  FitCommandOptions fit;
+  auto* fit_cmd = app.add_subcommand(
+      "fit", "Fit one triangular B-spline to a scan with parameters (u, v) until the maximum "
+             "error is within the tolerance, and write it as .tbs. Inputs: PLY (ASCII or binary; "
+             "vertex u v, s t or texture_u texture_v), OBJ (vt), XYZ/TXT with 5 or 8 columns "
+             "(x y z u v [nx ny nz]). Prints a summary table on stdout, progress on stderr.");
+  fit_cmd->add_option("input", fit.input, "The scan")->required();
+  fit_cmd->add_option("-o,--output", fit.output, "The .tbs file to write")->required();
+  fit_cmd->add_option("--degree", fit.degree, "Polynomial degree n (C^(n-1) where smooth)")
+      ->check(CLI::Range(1, 8))->capture_default_str();
+  fit_cmd->add_option("--tolerance", fit.tolerance,
+                      "Maximum error, relative to the largest side of the points' bounding box "
+                      "(1e-3 = 0.1 %)")
+      ->check(CLI::PositiveNumber)->capture_default_str();
+  fit_cmd->add_option("--tolerance-abs", fit.tolerance_abs,
+                      "Maximum error in model units (overrides --tolerance)")
+      ->check(CLI::PositiveNumber);
+  fit_cmd->add_option("--triangles", fit.triangles,
+                      "Triangles of the initial domain (default: points / 200, 32 to 4000)")
+      ->check(CLI::Range(1, 10'000'000));
+  fit_cmd->add_option("--fairness", fit.fairness,
+                      "Weight of the normal fairness term (dimensionless; 0 turns it off)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  auto* fa = fit_cmd->add_option("--feature-angle", fit.feature_angle,
+                                 "Dihedral angle in degrees above which an edge is a sharp feature "
+                                 "(kept C^0)")
+                 ->check(CLI::Range(0.0, 180.0))->capture_default_str();
+  fit_cmd->add_flag("--no-features", fit.no_features, "Do not detect sharp features")->excludes(fa);
+  fit_cmd->add_option("--max-control-points", fit.max_control_points,
+                      "Stop refining before exceeding this many control points (default: half "
+                      "the points)")
+      ->check(CLI::PositiveNumber);
+  fit_cmd->add_option("--max-iterations", fit.max_iterations, "Most refinement rounds")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  fit_cmd->add_option("--knot-sweeps", fit.knot_sweeps,
+                      "Knot optimisation passes per round (0 = fixed knots)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  fit_cmd->add_option("--units", fit.units, "Length unit of the scan: mm, cm, m, um, in, ft, unitless")
+      ->check(CLI::IsMember({"mm", "cm", "m", "um", "in", "ft", "unitless"}))->capture_default_str();
+  fit_cmd->add_option("--report", fit.report, "Also write the fit report (JSON) here");
+  fit_cmd->add_option("--threads,-t", fit.threads, "Worker threads (0 = all cores); the result "
+                                                   "does not depend on it")
+      ->check(CLI::NonNegativeNumber);
+  fit_cmd->add_flag("--quiet,-q", fit.quiet, "No progress messages on stderr");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -48,6 +93,7 @@ int main(int argc, char** argv) {
   try {
     if (*info_cmd) return run_info(info);
     if (*eval_cmd) return run_eval(eval);
+    if (*fit_cmd) return run_fit(fit);
   } catch (const tbs::IoError& e) {
     std::fprintf(stderr, "tbs: error: %s\n", e.what());
     return kIo;

@@ -4,9 +4,9 @@
 TBS_PACKAGES=(
   build-essential cmake pkg-config
   libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev
-  libtbb-dev nlohmann-json3-dev libcli11-dev
+  libtbb-dev nlohmann-json3-dev libcli11-dev libsuitesparse-dev libtinyobjloader-dev
 )
-TBS_TEST_PACKAGES=(libgtest-dev libgmock-dev libbenchmark-dev python3 python3-jsonschema)
+TBS_TEST_PACKAGES=(libgtest-dev libgmock-dev libbenchmark-dev python3 python3-jsonschema libcgal-demo)
 
 tbs_install_deps() {
   local wanted=("${TBS_PACKAGES[@]}" "$@") missing=() p

@@ -203,23 +203,9 @@ std::string KnotCheck::summary(size_t max_lines) const {
   return s;
 }
 
-KnotCheck check_knot_conditions(const Domain& d, int n, std::span<const Point2> knots) {
-  KnotCheck check;
-  if (knots.size() != static_cast<size_t>(d.vertex_count()) * (n + 1)) {
-    check.issues.push_back({"finite", -1, -1, {-1, -1, -1},
-                            "expected " + std::to_string(d.vertex_count() * (n + 1)) +
-                                " knots, got " + std::to_string(knots.size())});
-    return check;
-  }
-  for (int v = 0; v < d.vertex_count(); ++v)
-    for (int k = 0; k <= n; ++k)
-      if (!knots[static_cast<size_t>(v) * (n + 1) + k].allFinite())
-        check.issues.push_back({"finite", -1, v, {-1, -1, -1},
-                                "knot " + knot_name(v, k) + " is not finite"});
-  if (!check.ok()) return check;
-  Checker c(d, n, knots);
-
-  for (int t = 0; t < d.triangle_count(); ++t) {
+namespace {
+// Orientation of every X_{I,beta} and their common interior, for triangle t.
+void check_triangle(const Domain& d, int n, const Checker& c, int t, KnotCheck& check) {
     const auto& tri = d.triangle(t);
     bool oriented = true;
     for (int m = 0; m <= n && oriented; ++m)
@@ -242,7 +228,7 @@ KnotCheck check_knot_conditions(const Domain& d, int n, std::span<const Point2> 
                  std::to_string(tri[j])});
         break;
       }
-    if (!oriented) continue;
+    if (!oriented) return;
     std::vector<Point2> poly{c.knot(tri[0], 0), c.knot(tri[1], 0), c.knot(tri[2], 0)};
     const double area0 = polygon_area(poly);
     for (int m = 1; m <= n && !poly.empty(); ++m)
@@ -263,9 +249,47 @@ KnotCheck check_knot_conditions(const Domain& d, int n, std::span<const Point2> 
                                   "triangles at its vertex (Traas's scheme)"});
   }
 
+KnotCheck check_finite(const Domain& d, int n, std::span<const Point2> knots) {
+  KnotCheck check;
+  if (knots.size() != static_cast<size_t>(d.vertex_count()) * (n + 1)) {
+    check.issues.push_back({"finite", -1, -1, {-1, -1, -1},
+                            "expected " + std::to_string(d.vertex_count() * (n + 1)) +
+                                " knots, got " + std::to_string(knots.size())});
+    return check;
+  }
+  for (int v = 0; v < d.vertex_count(); ++v)
+    for (int k = 0; k <= n; ++k)
+      if (!knots[static_cast<size_t>(v) * (n + 1) + k].allFinite())
+        check.issues.push_back({"finite", -1, v, {-1, -1, -1},
+                                "knot " + knot_name(v, k) + " is not finite"});
+  return check;
+}
+}  // namespace
+
+KnotCheck check_knot_conditions(const Domain& d, int n, std::span<const Point2> knots) {
+  KnotCheck check = check_finite(d, n, knots);
+  if (!check.ok()) return check;
+  Checker c(d, n, knots);
+  for (int t = 0; t < d.triangle_count(); ++t) check_triangle(d, n, c, t, check);
   for (const auto& loop : d.boundary_loops())
     for (size_t i = 0; i < loop.size(); ++i)
       c.check_boundary_edge(loop[i], loop[(i + 1) % loop.size()], &check.issues);
+  return check;
+}
+
+KnotCheck check_knot_conditions(const Domain& d, int n, std::span<const Point2> knots,
+                                std::span<const int> triangles) {
+  KnotCheck check = check_finite(d, n, knots);
+  if (!check.ok()) return check;
+  Checker c(d, n, knots);
+  for (int t : triangles) {
+    check_triangle(d, n, c, t, check);
+    const auto& tri = d.triangle(t);
+    for (int k = 0; k < 3; ++k) {
+      const int a = tri[k], b = tri[(k + 1) % 3];
+      if (d.is_boundary_edge(d.find_edge(a, b))) c.check_boundary_edge(a, b, &check.issues);
+    }
+  }
   return check;
 }
 

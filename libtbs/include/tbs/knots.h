@@ -41,6 +41,11 @@ struct KnotCheck {
 /// \pre knots.size() == domain.vertex_count() * (degree + 1).
 KnotCheck check_knot_conditions(const Domain& domain, int degree, std::span<const Point2> knots);
 
+/// The same conditions, checked only for the given triangles and their boundary edges: what
+/// moving the knots of one vertex can break is confined to the triangles around it.
+KnotCheck check_knot_conditions(const Domain& domain, int degree, std::span<const Point2> knots,
+                                std::span<const int> triangles);
+
 /// For each vertex, the feature line its free sub-knots t_{i,1..n-1} lie on, given as the
 /// other endpoint of a feature edge at the vertex, or -1 if its sub-knots are placed freely.
 /// Each feature edge is served by exactly one endpoint where possible, so the n+1 knots on its

@@ -1,0 +1,103 @@
+#pragma once
+/// \file
+/// Fitting one DMS spline to scanned points with parameters (He & Qin, section 4): initial
+/// domain, control points by sparse least squares, free knots, adaptive refinement.
+
+#include <tbs/scan.h>
+#include <tbs/spline.h>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace tbs {
+
+/// Progress of a long stage, reported to FitOptions::progress.
+struct FitProgress {
+  std::string stage;    ///< "domain", "solve", "knots", "refine", "error"
+  std::string message;  ///< one line for a person, e.g. "iteration 3: 1,204 triangles"
+  double fraction = 0;  ///< of the stage, in [0, 1]
+};
+
+struct FitOptions {
+  int degree = 3;
+  /// Target maximum error, relative to the largest side of the points' bounding box
+  /// (1e-3 = 0.1 %), as in the paper. Ignored when tolerance_abs > 0.
+  double tolerance = 1e-3;
+  /// Target maximum error in model units; 0 means use `tolerance`.
+  double tolerance_abs = 0;
+  /// Domain triangles of the initial triangulation; 0 chooses points / 200, within [32, 4000].
+  int triangles = 0;
+  /// Weight of the normal fairness term, dimensionless: the term is scaled by the square of the
+  /// parameter domain's size, so the same value acts alike for any parameter scale.
+  double fairness = 1e-5;
+  /// Dihedral angle (degrees) above which a mesh edge is a sharp feature.
+  double feature_angle = 40;
+  bool features = true;
+  /// Refinement stops before the spline would exceed this many control points; 0 means half
+  /// the number of points (more unknowns than that only fit the noise).
+  int max_control_points = 0;
+  /// Most refinement rounds.
+  int max_iterations = 25;
+  /// OptimizeKnot passes over the vertices after each control-point solve; 0 keeps the knots
+  /// where the default placement puts them (fixed knots).
+  int knot_sweeps = 1;
+  /// Worker threads; 0 = all cores. The result does not depend on it.
+  int threads = 0;
+  /// Called from the calling thread between steps. May be empty.
+  std::function<void(const FitProgress&)> progress;
+};
+
+/// The fit report: the paper's Table 1 columns and more. Errors are distances |p - F(u)|.
+struct FitReport {
+  size_t points = 0;
+  size_t points_moved = 0;  ///< parameters nudged into the domain (on its simplified boundary)
+  double max_uv_move = 0;   ///< largest such nudge, in parameter units
+  int degree = 0;
+  int domain_triangles = 0;
+  int domain_vertices = 0;
+  int feature_edges = 0;
+  int holes = 0;
+  int control_points = 0;
+  double scale = 0;  ///< largest side of the points' bounding box: errors are divided by it
+  double max_error = 0;
+  double rms_error = 0;
+  double max_error_abs = 0;
+  double rms_error_abs = 0;
+  double tolerance = 0;      ///< relative
+  double tolerance_abs = 0;  ///< model units
+  double fairness = 0;
+  bool converged = false;
+  std::string stop_reason;
+  int iterations = 0;
+  bool normals_estimated = false;
+  double seconds = 0;
+  /// Wall time per stage: normals, domain, solve, knots, refine, error.
+  std::vector<std::pair<std::string, double>> stage_seconds;
+  /// One entry per refinement round: triangles, control points, max and RMS error (relative).
+  struct Round {
+    int triangles;
+    int control_points;
+    double max_error;
+    double rms_error;
+  };
+  std::vector<Round> rounds;
+
+  /// The report as a JSON object (text), fields in a fixed order. Without times it is a
+  /// function of the input and options only (stored in .tbs files, which must be reproducible).
+  std::string to_json(bool with_times = true) const;
+};
+
+struct FitResult {
+  Spline spline;
+  FitReport report;
+  std::vector<Point2> uv;       ///< the parameters used, one per input point
+  std::vector<double> error;    ///< |p - F(u)| per input point, model units
+};
+
+/// Fits one DMS spline to a scan that has parameters.
+/// \throw InvalidInput if the scan has no parameters, too few points, degenerate or folded
+///        parameters, or options out of range; SolverError if the sparse solve fails.
+FitResult fit(const Scan& scan, const FitOptions& options);
+
+}  // namespace tbs

@@ -1,0 +1,376 @@
+#include <tbs/errors.h>
+#include <tbs/evaluator.h>
+#include <tbs/fit.h>
+#include <tbs/knots.h>
+#include <tbs/predicates.h>
+#include <tbs/tolerances.h>
+
+#include "fit_domain.h"
+#include "fit_knots.h"
+#include "fit_solve.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <numeric>
+
+namespace tbs {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+void check_options(const FitOptions& o) {
+  auto bad = [](const std::string& what) { throw InvalidInput("fit options: " + what); };
+  if (o.degree < 1 || o.degree > tol::kMaxDegree)
+    bad("degree " + std::to_string(o.degree) + " is out of range; use 1 to " + std::to_string(tol::kMaxDegree));
+  if (!(o.tolerance > 0) || !std::isfinite(o.tolerance))
+    bad("tolerance must be a positive number (relative to the model size, e.g. 1e-3)");
+  if (!(o.tolerance_abs >= 0) || !std::isfinite(o.tolerance_abs)) bad("tolerance_abs must be >= 0");
+  if (o.triangles < 0 || o.triangles > 10'000'000) bad("triangles must be between 0 (automatic) and 10^7");
+  if (!(o.fairness >= 0) || !std::isfinite(o.fairness)) bad("fairness must be >= 0");
+  if (!(o.feature_angle > 0 && o.feature_angle < 180)) bad("feature angle must be between 0 and 180 degrees");
+  if (o.max_control_points < 0) bad("max_control_points must be >= 0");
+  if (o.max_iterations < 0) bad("max_iterations must be >= 0");
+  if (o.knot_sweeps < 0) bad("knot_sweeps must be >= 0");
+  if (o.threads < 0) bad("threads must be >= 0");
+}
+
+// Knots for a refined domain: the previous knots of vertices that existed before where they
+// still satisfy the knot conditions, the default placement elsewhere.
+std::vector<Point2> transfer_knots(const Domain& d, int n, const std::vector<int>& ids,
+                                   const std::map<int, std::vector<Point2>>& previous) {
+  std::vector<Point2> knots = default_knots(d, n);
+  const std::vector<Point2> fresh = knots;
+  std::vector<char> reverted(d.vertex_count(), 0);
+  for (int v = 0; v < d.vertex_count(); ++v) {
+    auto it = previous.find(ids[v]);
+    if (it == previous.end() || it->second[0] != d.vertex(v)) continue;
+    for (int k = 0; k <= n; ++k) knots[static_cast<size_t>(v) * (n + 1) + k] = it->second[k];
+  }
+  for (int round = 0; round < 8; ++round) {
+    const KnotCheck check = check_knot_conditions(d, n, knots);
+    if (check.ok()) return knots;
+    auto revert = [&](int v) {
+      if (v < 0 || reverted[v]) return;
+      reverted[v] = 1;
+      for (int k = 0; k <= n; ++k)
+        knots[static_cast<size_t>(v) * (n + 1) + k] = fresh[static_cast<size_t>(v) * (n + 1) + k];
+    };
+    for (const auto& issue : check.issues) {
+      revert(issue.vertex);
+      if (issue.triangle >= 0)
+        for (int v : d.triangle(issue.triangle)) revert(v);
+    }
+  }
+  return fresh;
+}
+
+struct Errors {
+  double max = 0, rms = 0;
+};
+
+}  // namespace
+
+std::string FitReport::to_json(bool with_times) const {
+  nlohmann::ordered_json j;
+  j["points"] = points;
+  j["points_moved"] = points_moved;
+  j["degree"] = degree;
+  j["domain_triangles"] = domain_triangles;
+  j["domain_vertices"] = domain_vertices;
+  j["feature_edges"] = feature_edges;
+  j["holes"] = holes;
+  j["control_points"] = control_points;
+  j["max_error"] = max_error;
+  j["rms_error"] = rms_error;
+  j["max_error_abs"] = max_error_abs;
+  j["rms_error_abs"] = rms_error_abs;
+  j["tolerance"] = tolerance;
+  j["tolerance_abs"] = tolerance_abs;
+  j["scale"] = scale;
+  j["fairness"] = fairness;
+  j["converged"] = converged;
+  j["stop_reason"] = stop_reason;
+  j["iterations"] = iterations;
+  j["normals_estimated"] = normals_estimated;
+  if (with_times) {
+    j["seconds"] = seconds;
+    nlohmann::ordered_json st = nlohmann::ordered_json::object();
+    for (const auto& [k, v] : stage_seconds) st[k] = v;
+    j["stage_seconds"] = st;
+  }
+  nlohmann::ordered_json r = nlohmann::ordered_json::array();
+  for (const auto& x : rounds)
+    r.push_back({{"domain_triangles", x.triangles},
+                 {"control_points", x.control_points},
+                 {"max_error", x.max_error},
+                 {"rms_error", x.rms_error}});
+  j["rounds"] = r;
+  return j.dump(2);
+}
+
+FitResult fit(const Scan& scan, const FitOptions& opt) {
+  const auto t_start = Clock::now();
+  check_options(opt);
+  const std::string name = scan.source.empty() ? "<scan>" : scan.source;
+  const size_t N = scan.positions.size();
+  if (!scan.has_uv())
+    throw InvalidInput(name + ": this input has no parameters (u, v); give a PLY with u v (or s t, "
+                       "texture_u texture_v) properties, an OBJ with vt, or an .xyz with 5 or 8 "
+                       "columns (automatic parameterization is not available yet)");
+  if (scan.uv.size() != N) throw InvalidInput(name + ": " + std::to_string(scan.uv.size()) +
+                                              " parameters for " + std::to_string(N) + " points");
+  if (scan.has_normals() && scan.normals.size() != N)
+    throw InvalidInput(name + ": " + std::to_string(scan.normals.size()) + " normals for " +
+                       std::to_string(N) + " points");
+  if (N < 3) throw InvalidInput(name + ": a fit needs at least 3 points, got " + std::to_string(N));
+
+  FitResult res;
+  FitReport& rep = res.report;
+  std::map<std::string, double> stage;
+  auto progress = [&](const std::string& st, const std::string& msg, double f) {
+    if (opt.progress) opt.progress({st, msg, f});
+  };
+  const int n = opt.degree;
+  rep.points = N;
+  rep.degree = n;
+  rep.fairness = opt.fairness;
+
+  Box3 box;
+  for (const auto& p : scan.positions) box.extend(p);
+  const Vector3 ext = box.max - box.min;
+  rep.scale = ext.maxCoeff();
+  if (!(rep.scale > 0)) throw InvalidInput(name + ": all points are identical");
+  rep.tolerance_abs = opt.tolerance_abs > 0 ? opt.tolerance_abs : opt.tolerance * rep.scale;
+  rep.tolerance = rep.tolerance_abs / rep.scale;
+
+  // Normals for the fairness term.
+  std::vector<Vector3> normals;
+  {
+    const auto t0 = Clock::now();
+    if (scan.has_normals()) {
+      normals = scan.normals;
+    } else if (opt.fairness > 0) {
+      progress("normals", "estimating normals of " + std::to_string(N) + " points", 0);
+      normals = estimate_normals(scan.positions, scan.uv, scan.triangles);
+      rep.normals_estimated = true;
+    } else {
+      normals.assign(N, Vector3::Zero());
+    }
+    stage["normals"] += seconds_since(t0);
+  }
+
+  // Initial domain.
+  const int target = opt.triangles > 0 ? opt.triangles
+                                       : std::clamp(static_cast<int>(N / 200), 32, 4000);
+  progress("domain", "building the domain (about " + std::to_string(target) + " triangles)", 0);
+  auto t0 = Clock::now();
+  detail::DomainInput din{scan.uv, scan.positions, scan.triangles, target, opt.features, opt.feature_angle};
+  detail::FitDomain fdom(din);
+  stage["domain"] += seconds_since(t0);
+
+  Box2 uvbox;
+  for (size_t i = 0; i < N; ++i)
+    if (!fdom.excluded()[i]) uvbox.extend(scan.uv[i]);
+  const double uv_size = std::max(uvbox.max.x() - uvbox.min.x(), uvbox.max.y() - uvbox.min.y());
+  const double lambda = opt.fairness * uv_size * uv_size;
+  const size_t max_cp = opt.max_control_points > 0 ? static_cast<size_t>(opt.max_control_points)
+                                                   : std::max<size_t>(N / 2, 16);
+
+  std::vector<Point2> uv(scan.uv.begin(), scan.uv.end());
+  std::vector<int> located(N, -1);
+  std::vector<int> order, start;
+  std::vector<Point2> knots = default_knots(fdom.domain(), n);
+  std::vector<Point3> positions(N);
+  std::vector<double> err(N, 0.0);
+  bool first = true;
+  std::vector<Point3> previous_cp;
+
+  for (int iter = 0;; ++iter) {
+    Spline spline = Spline::with_canonical_map(n, fdom.domain(), knots);
+    if (!previous_cp.empty() && previous_cp.size() == static_cast<size_t>(spline.control_point_count()))
+      spline.control_points() = previous_cp;
+    Evaluator eval(spline);
+
+    // Locate the points; on the first round nudge boundary points the snap left outside.
+    t0 = Clock::now();
+    for (size_t i = 0; i < N; ++i) {
+      if (fdom.excluded()[i]) continue;
+      located[i] = eval.locate(uv[i]);
+      if (located[i] >= 0 || !first) continue;
+      // Nearest domain vertex, then step toward the centroid of one of its triangles.
+      const Domain& d = spline.domain();
+      int best = -1;
+      double bd = std::numeric_limits<double>::infinity();
+      for (int v = 0; v < d.vertex_count(); ++v)
+        if (d.is_boundary_vertex(v) && (d.vertex(v) - uv[i]).norm() < bd) bd = (d.vertex(v) - uv[i]).norm(), best = v;
+      if (best >= 0) {
+        const int t = d.vertex_triangles(best)[0];
+        const auto& tri = d.triangle(t);
+        const Point2 c = (d.vertex(tri[0]) + d.vertex(tri[1]) + d.vertex(tri[2])) / 3.0;
+        for (double f = 1e-9; f < 1 && located[i] < 0; f *= 4) {
+          const Point2 q = uv[i] + f * (c - uv[i]);
+          located[i] = eval.locate(q);
+          if (located[i] >= 0) {
+            rep.max_uv_move = std::max(rep.max_uv_move, (q - uv[i]).norm());
+            uv[i] = q;
+            ++rep.points_moved;
+          }
+        }
+      }
+    }
+    first = false;
+    size_t used = 0;
+    for (size_t i = 0; i < N; ++i) used += located[i] >= 0;
+    if (used == 0) throw InvalidInput(name + ": no point lies in the fitting domain");
+    stage["domain"] += seconds_since(t0);
+
+    auto make_points = [&] {
+      detail::group_by_triangle(located, spline.domain().triangle_count(), order, start);
+      return detail::FitPoints{scan.positions, normals, uv, located, order, start};
+    };
+    auto solve = [&] {
+      const auto ts = Clock::now();
+      progress("solve", "round " + std::to_string(iter + 1) + ": solving " +
+                            std::to_string(spline.control_point_count()) + " control points",
+               0);
+      spline.control_points() = detail::solve_control_points(spline, eval, make_points(), lambda, opt.threads);
+      eval = Evaluator(spline);
+      stage["solve"] += seconds_since(ts);
+    };
+    solve();
+
+    // Errors per point.
+    auto measure = [&] {
+      const auto ts = Clock::now();
+      std::vector<uint8_t> inside(N);
+      eval.evaluate_batch(uv, positions, {}, {}, inside, opt.threads);
+      double sum = 0, mx = 0;
+      size_t cnt = 0;
+      for (size_t i = 0; i < N; ++i) {
+        if (located[i] < 0) {
+          err[i] = std::numeric_limits<double>::quiet_NaN();
+          continue;
+        }
+        err[i] = (scan.positions[i] - positions[i]).norm();
+        sum += err[i] * err[i];
+        mx = std::max(mx, err[i]);
+        ++cnt;
+      }
+      stage["error"] += seconds_since(ts);
+      return Errors{mx, std::sqrt(sum / std::max<size_t>(cnt, 1))};
+    };
+    Errors e = measure();
+
+    // Free knots: OptimizeKnot on the vertices of triangles with large errors, then re-solve.
+    if (opt.knot_sweeps > 0 && e.max > rep.tolerance_abs) {
+      const auto ts = Clock::now();
+      const Domain& d = spline.domain();
+      for (int sweep = 0; sweep < opt.knot_sweeps; ++sweep) {
+        std::vector<double> tri_err(d.triangle_count(), 0.0);
+        for (size_t i = 0; i < N; ++i)
+          if (located[i] >= 0) tri_err[located[i]] = std::max(tri_err[located[i]], err[i]);
+        std::vector<char> want(d.vertex_count(), 0);
+        for (int t = 0; t < d.triangle_count(); ++t)
+          if (tri_err[t] > rep.tolerance_abs)
+            for (int v : d.triangle(t)) want[v] = 1;
+        std::vector<int> verts;
+        for (int v = 0; v < d.vertex_count(); ++v)
+          if (want[v]) verts.push_back(v);
+        progress("knots", "round " + std::to_string(iter + 1) + ": optimizing the knots of " +
+                              std::to_string(verts.size()) + " vertices",
+                 0);
+        const auto pts = make_points();
+        const auto st = detail::optimize_knots(spline, eval, located, pts, lambda, verts,
+                                               [&](int v, const Point2& p) { fdom.move_vertex(fdom.ids()[v], p); });
+        stage["knots"] += seconds_since(ts);
+        if (st.moved == 0) break;
+        solve();
+        e = measure();
+      }
+    }
+
+    rep.rounds.push_back({spline.domain().triangle_count(), spline.control_point_count(),
+                          e.max / rep.scale, e.rms / rep.scale});
+    progress("refine", "round " + std::to_string(iter + 1) + ": " +
+                           std::to_string(spline.domain().triangle_count()) + " triangles, " +
+                           std::to_string(spline.control_point_count()) + " control points, max error " +
+                           std::to_string(e.max / rep.scale),
+             0);
+    rep.iterations = iter + 1;
+    auto finish = [&](bool converged, const std::string& why) {
+      rep.converged = converged;
+      rep.stop_reason = why;
+      rep.max_error_abs = e.max;
+      rep.rms_error_abs = e.rms;
+      rep.max_error = e.max / rep.scale;
+      rep.rms_error = e.rms / rep.scale;
+      rep.domain_triangles = spline.domain().triangle_count();
+      rep.domain_vertices = spline.domain().vertex_count();
+      rep.feature_edges = static_cast<int>(spline.domain().feature_edges().size());
+      rep.holes = static_cast<int>(spline.domain().boundary_loops().size()) - 1;
+      rep.control_points = spline.control_point_count();
+      res.spline = std::move(spline);
+    };
+    if (e.max <= rep.tolerance_abs) {
+      finish(true, "tolerance reached");
+      break;
+    }
+    if (iter >= opt.max_iterations) {
+      finish(false, "iteration limit (" + std::to_string(opt.max_iterations) + ") reached");
+      break;
+    }
+
+    // Refinement: split the triangles with large errors, worst first, within the budget.
+    const Domain& d = spline.domain();
+    std::vector<double> tri_err(d.triangle_count(), 0.0);
+    for (size_t i = 0; i < N; ++i)
+      if (located[i] >= 0) tri_err[located[i]] = std::max(tri_err[located[i]], err[i]);
+    std::vector<int> bad;
+    for (int t = 0; t < d.triangle_count(); ++t)
+      if (tri_err[t] > rep.tolerance_abs) bad.push_back(t);
+    std::stable_sort(bad.begin(), bad.end(), [&](int a, int b) { return tri_err[a] > tri_err[b]; });
+    const size_t per_split = static_cast<size_t>(n) * n;  // 1 vertex, 3 edges, 2 more triangles
+    const size_t room = max_cp > static_cast<size_t>(spline.control_point_count())
+                            ? (max_cp - spline.control_point_count()) / per_split
+                            : 0;
+    if (room == 0) {
+      finish(false, "control-point budget (" + std::to_string(max_cp) + ") reached");
+      break;
+    }
+    if (bad.size() > room) bad.resize(room);
+    std::sort(bad.begin(), bad.end());
+    t0 = Clock::now();
+    std::map<int, std::vector<Point2>> prev;
+    for (int v = 0; v < d.vertex_count(); ++v) {
+      std::vector<Point2> k(n + 1);
+      for (int l = 0; l <= n; ++l) k[l] = spline.knot(v, l);
+      prev[fdom.ids()[v]] = std::move(k);
+    }
+    const int before = d.triangle_count();
+    fdom.split(bad);
+    if (fdom.domain().triangle_count() == before) {
+      finish(false, "the triangles with large errors cannot be split further");
+      break;
+    }
+    knots = transfer_knots(fdom.domain(), n, fdom.ids(), prev);
+    previous_cp.clear();
+    stage["refine"] += seconds_since(t0);
+  }
+
+  res.uv = std::move(uv);
+  res.error = std::move(err);
+  rep.seconds = seconds_since(t_start);
+  for (const char* s : {"normals", "domain", "solve", "knots", "refine", "error"})
+    rep.stage_seconds.emplace_back(s, stage[s]);
+  return res;
+}
+
+}  // namespace tbs

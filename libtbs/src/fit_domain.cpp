@@ -1,0 +1,779 @@
+#include "fit_domain.h"
+
+#include <tbs/errors.h>
+#include <tbs/predicates.h>
+
+#include "box_grid.h"
+
+#include <CGAL/Constrained_Delaunay_triangulation_2.h>
+#include <CGAL/Delaunay_mesh_face_base_2.h>
+#include <CGAL/Delaunay_mesh_size_criteria_2.h>
+#include <CGAL/Delaunay_mesh_vertex_base_2.h>
+#include <CGAL/Delaunay_mesher_2.h>
+#include <CGAL/Delaunay_triangulation_2.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_face_base_with_info_2.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <numbers>
+#include <unordered_map>
+#include <unordered_set>
+
+namespace tbs::detail {
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using CPoint = K::Point_2;
+
+// Region triangulation of bare parameters.
+using DtVb = CGAL::Triangulation_vertex_base_with_info_2<int, K>;
+using DtFb = CGAL::Triangulation_face_base_with_info_2<int, K>;
+using Dt = CGAL::Delaunay_triangulation_2<K, CGAL::Triangulation_data_structure_2<DtVb, DtFb>>;
+
+// Initial meshing.
+using MVb = CGAL::Triangulation_vertex_base_with_info_2<int, K, CGAL::Delaunay_mesh_vertex_base_2<K>>;
+using MFb = CGAL::Delaunay_mesh_face_base_2<K>;
+using MCdt = CGAL::Constrained_Delaunay_triangulation_2<K, CGAL::Triangulation_data_structure_2<MVb, MFb>>;
+using MCriteria = CGAL::Delaunay_mesh_size_criteria_2<MCdt>;
+
+// The working triangulation: vertex info = stable id, face info = inside the domain.
+using WVb = CGAL::Triangulation_vertex_base_with_info_2<int, K>;
+using WFb = CGAL::Triangulation_face_base_with_info_2<int, K, CGAL::Constrained_triangulation_face_base_2<K>>;
+using WCdt = CGAL::Constrained_Delaunay_triangulation_2<K, CGAL::Triangulation_data_structure_2<WVb, WFb>>;
+
+CPoint cp(const Point2& p) { return {p.x(), p.y()}; }
+Point2 ep(const CPoint& p) { return {p.x(), p.y()}; }
+
+uint64_t edge_key(int a, int b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b);
+}
+
+// A triangulated region of the parameter plane, over input point indices, CCW in uv.
+struct Region {
+  std::vector<std::array<int, 3>> tris;
+};
+
+double signed_area2(const Point2& a, const Point2& b, const Point2& c) { return det3(a, b, c); }
+
+Region region_from_faces(std::span<const Point2> uv, std::span<const std::array<int, 3>> faces) {
+  size_t pos = 0, neg = 0, zero = 0, first_neg = 0, first_pos = 0;
+  std::vector<int> sign(faces.size());
+  for (size_t f = 0; f < faces.size(); ++f) {
+    const auto& t = faces[f];
+    const int o = orientation(uv[t[0]], uv[t[1]], uv[t[2]]);
+    sign[f] = o;
+    if (o > 0) {
+      if (pos++ == 0) first_pos = f;
+    } else if (o < 0) {
+      if (neg++ == 0) first_neg = f;
+    } else {
+      ++zero;
+    }
+  }
+  if (pos == 0 && neg == 0)
+    throw InvalidInput("every face has zero area in the parameter plane (u, v): the parameters are "
+                       "degenerate; give each point distinct, non-collinear (u, v)");
+  const bool flip = neg > pos;
+  const size_t minority = flip ? pos : neg;
+  if (minority > 0)
+    throw InvalidInput(
+        "the parameterization folds over: " + std::to_string(minority) + " of " +
+        std::to_string(faces.size()) + " faces are " + (flip ? "counter-clockwise" : "clockwise") +
+        " in (u, v) while the others are not (first: face " +
+        std::to_string(flip ? first_pos : first_neg) +
+        "); the fit needs a bijective parameterization (no flipped triangles)");
+  Region r;
+  r.tris.reserve(faces.size() - zero);
+  for (size_t f = 0; f < faces.size(); ++f) {
+    if (sign[f] == 0) continue;
+    auto t = faces[f];
+    if (flip) std::swap(t[1], t[2]);
+    r.tris.push_back(t);
+  }
+  return r;
+}
+
+// The directed boundary edges of a region, as next[a] = b; throws on non-manifold input.
+std::vector<std::vector<int>> boundary_loops(const Region& r, size_t n_points) {
+  std::unordered_map<uint64_t, int> directed;  // (a,b) -> count
+  directed.reserve(r.tris.size() * 3);
+  auto dkey = [](int a, int b) {
+    return (static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b);
+  };
+  for (size_t f = 0; f < r.tris.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = r.tris[f][k], b = r.tris[f][(k + 1) % 3];
+      if (++directed[dkey(a, b)] > 1)
+        throw InvalidInput("the mesh is not manifold: edge (" + std::to_string(a) + ", " +
+                           std::to_string(b) + ") is used twice in the same direction (face " +
+                           std::to_string(f) + "); repair the mesh or orient its faces consistently");
+    }
+  std::vector<int> next(n_points, -1);
+  std::vector<int> out_count(n_points, 0);
+  for (const auto& t : r.tris)
+    for (int k = 0; k < 3; ++k) {
+      const int a = t[k], b = t[(k + 1) % 3];
+      if (directed.count(dkey(b, a))) continue;
+      if (++out_count[a] > 1)
+        throw InvalidInput("the mesh is not manifold at point " + std::to_string(a) +
+                           ": two boundary loops touch there; repair the mesh (split the vertex)");
+      next[a] = b;
+    }
+  std::vector<std::vector<int>> loops;
+  std::vector<char> seen(n_points, 0);
+  for (size_t s = 0; s < n_points; ++s) {
+    if (next[s] < 0 || seen[s]) continue;
+    std::vector<int> loop;
+    int v = static_cast<int>(s);
+    while (!seen[v]) {
+      seen[v] = 1;
+      loop.push_back(v);
+      v = next[v];
+      if (v < 0) throw InvalidInput("the mesh boundary is not closed at point " + std::to_string(loop.back()));
+    }
+    loops.push_back(std::move(loop));
+  }
+  return loops;
+}
+
+// Keeps the largest edge-connected component of a region; returns the dropped triangle count.
+size_t keep_largest_component(Region& r, std::span<const Point2> uv) {
+  std::unordered_map<uint64_t, std::array<int, 2>> edge_faces;
+  for (size_t f = 0; f < r.tris.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      auto [it, fresh] = edge_faces.try_emplace(edge_key(r.tris[f][k], r.tris[f][(k + 1) % 3]),
+                                                std::array<int, 2>{static_cast<int>(f), -1});
+      if (!fresh) it->second[1] = static_cast<int>(f);
+    }
+  std::vector<int> comp(r.tris.size(), -1);
+  std::vector<double> area;
+  for (size_t s = 0; s < r.tris.size(); ++s) {
+    if (comp[s] >= 0) continue;
+    const int c = static_cast<int>(area.size());
+    area.push_back(0);
+    std::vector<int> stack{static_cast<int>(s)};
+    comp[s] = c;
+    while (!stack.empty()) {
+      const int f = stack.back();
+      stack.pop_back();
+      const auto& t = r.tris[f];
+      area[c] += signed_area2(uv[t[0]], uv[t[1]], uv[t[2]]);
+      for (int k = 0; k < 3; ++k) {
+        const auto& ef = edge_faces[edge_key(t[k], t[(k + 1) % 3])];
+        const int g = ef[0] == f ? ef[1] : ef[0];
+        if (g >= 0 && comp[g] < 0) comp[g] = c, stack.push_back(g);
+      }
+    }
+  }
+  if (area.size() <= 1) return 0;
+  const int best = static_cast<int>(std::max_element(area.begin(), area.end()) - area.begin());
+  Region kept;
+  for (size_t f = 0; f < r.tris.size(); ++f)
+    if (comp[f] == best) kept.tris.push_back(r.tris[f]);
+  const size_t dropped = r.tris.size() - kept.tris.size();
+  r = std::move(kept);
+  return dropped;
+}
+
+// Bare parameters: Delaunay triangulation, minus triangles much larger than the local point
+// spacing (an alpha shape), so concave outlines and holes of the data are kept.
+Region region_from_points(std::span<const Point2> uv) {
+  std::vector<std::pair<CPoint, int>> pts;
+  pts.reserve(uv.size());
+  for (size_t i = 0; i < uv.size(); ++i) pts.emplace_back(cp(uv[i]), static_cast<int>(i));
+  Dt dt;
+  dt.insert(pts.begin(), pts.end());
+  if (dt.dimension() < 2)
+    throw InvalidInput("the parameters (u, v) of all points are collinear or identical; the fit "
+                       "needs parameters that span an area");
+  // Spacing: median over vertices of the shortest incident edge.
+  std::vector<double> nn;
+  nn.reserve(dt.number_of_vertices());
+  for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) {
+    double best = std::numeric_limits<double>::infinity();
+    auto c = dt.incident_vertices(v), done = c;
+    do {
+      if (!dt.is_infinite(c)) best = std::min(best, std::sqrt(CGAL::squared_distance(v->point(), c->point())));
+    } while (++c != done);
+    nn.push_back(best);
+  }
+  std::nth_element(nn.begin(), nn.begin() + nn.size() / 2, nn.end());
+  const double spacing = nn[nn.size() / 2];
+  // Random uniform samples leave empty circles a few times the spacing; only larger gaps are
+  // outline or holes.
+  const double alpha = 6.0 * spacing;
+  Region r;
+  std::vector<Dt::Face_handle> faces;
+  for (auto f = dt.finite_faces_begin(); f != dt.finite_faces_end(); ++f) faces.push_back(f);
+  std::vector<char> keep(faces.size());
+  for (size_t i = 0; i < faces.size(); ++i) {
+    faces[i]->info() = static_cast<int>(i);
+    const auto& a = faces[i]->vertex(0)->point();
+    const auto& b = faces[i]->vertex(1)->point();
+    const auto& c = faces[i]->vertex(2)->point();
+    const double la = std::sqrt(CGAL::squared_distance(b, c)), lb = std::sqrt(CGAL::squared_distance(a, c)),
+                 lc = std::sqrt(CGAL::squared_distance(a, b));
+    const double area2 = std::fabs(CGAL::area(a, b, c)) * 2;
+    const double circumradius = area2 > 0 ? la * lb * lc / (2 * area2) : std::numeric_limits<double>::infinity();
+    keep[i] = circumradius <= alpha;
+  }
+  // Pinch vertices (two kept fans touching at a point) are filled back in until none is left.
+  for (int round = 0; round < 20; ++round) {
+    bool changed = false;
+    for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) {
+      int transitions = 0;
+      auto f = dt.incident_faces(v), done = f;
+      bool prev = !dt.is_infinite(f) && keep[f->info()];
+      do {
+        ++f;
+        const bool cur = !dt.is_infinite(f) && keep[f->info()];
+        if (cur != prev) ++transitions;
+        prev = cur;
+      } while (f != done);
+      if (transitions > 2) {
+        auto g = dt.incident_faces(v), gd = g;
+        do {
+          if (!dt.is_infinite(g) && !keep[g->info()]) keep[g->info()] = 1, changed = true;
+        } while (++g != gd);
+      }
+    }
+    if (!changed) break;
+  }
+  for (size_t i = 0; i < faces.size(); ++i)
+    if (keep[i])
+      r.tris.push_back({faces[i]->vertex(0)->info(), faces[i]->vertex(1)->info(), faces[i]->vertex(2)->info()});
+  if (r.tris.empty()) throw InvalidInput("the parameters (u, v) do not span an area");
+  keep_largest_component(r, uv);
+  return r;
+}
+
+// Sharp edges of the region (dihedral angle of the 3D triangles above the threshold), chained
+// into polylines of point indices.
+std::vector<std::vector<int>> feature_chains(const Region& r, std::span<const Point3> pos,
+                                             double angle_deg) {
+  std::unordered_map<uint64_t, std::array<int, 2>> edge_faces;
+  for (size_t f = 0; f < r.tris.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      auto [it, fresh] = edge_faces.try_emplace(edge_key(r.tris[f][k], r.tris[f][(k + 1) % 3]),
+                                                std::array<int, 2>{static_cast<int>(f), -1});
+      if (!fresh) it->second[1] = static_cast<int>(f);
+    }
+  std::vector<Vector3> fn(r.tris.size());
+  for (size_t f = 0; f < r.tris.size(); ++f) {
+    const auto& t = r.tris[f];
+    const Vector3 n = (pos[t[1]] - pos[t[0]]).cross(pos[t[2]] - pos[t[0]]);
+    fn[f] = n.norm() > 0 ? Vector3(n.normalized()) : Vector3::Zero();
+  }
+  const double cos_limit = std::cos(angle_deg * std::numbers::pi / 180);
+  std::map<int, std::vector<int>> nbr;  // ordered: deterministic chaining
+  std::vector<std::pair<int, int>> sharp;
+  for (const auto& [key, ef] : edge_faces) {
+    if (ef[1] < 0) continue;
+    if (fn[ef[0]].isZero() || fn[ef[1]].isZero()) continue;
+    if (fn[ef[0]].dot(fn[ef[1]]) >= cos_limit) continue;
+    sharp.emplace_back(static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu));
+  }
+  std::sort(sharp.begin(), sharp.end());
+  for (auto [a, b] : sharp) nbr[a].push_back(b), nbr[b].push_back(a);
+  for (auto& [v, list] : nbr) std::sort(list.begin(), list.end());
+  std::unordered_set<uint64_t> used;
+  std::vector<std::vector<int>> chains;
+  auto walk = [&](int start, int first) {
+    std::vector<int> chain{start};
+    int p = start, q = first;
+    while (!used.count(edge_key(p, q))) {
+      used.insert(edge_key(p, q));
+      chain.push_back(q);
+      const auto& nq = nbr[q];
+      if (nq.size() != 2) break;
+      const int nx = nq[0] == p ? nq[1] : nq[0];
+      p = q;
+      q = nx;
+    }
+    if (chain.size() >= 2) chains.push_back(std::move(chain));
+  };
+  for (const auto& [v, list] : nbr)
+    if (list.size() != 2)
+      for (int w : list) walk(v, w);
+  for (const auto& [v, list] : nbr)
+    for (int w : list) walk(v, w);  // closed loops
+  return chains;
+}
+
+// Douglas-Peucker on an open polyline; keeps the ends.
+void douglas_peucker(std::span<const Point2> p, size_t i, size_t j, double tol, std::vector<char>& keep) {
+  if (j <= i + 1) return;
+  double best = -1;
+  size_t at = i;
+  const Vector2 d = p[j] - p[i];
+  const double len = d.norm();
+  for (size_t k = i + 1; k < j; ++k) {
+    const double dist = len > 0 ? std::fabs(det3(p[i], p[j], p[k])) / len : (p[k] - p[i]).norm();
+    if (dist > best) best = dist, at = k;
+  }
+  if (best > tol) {
+    keep[at] = 1;
+    douglas_peucker(p, i, at, tol, keep);
+    douglas_peucker(p, at, j, tol, keep);
+  }
+}
+
+// Adds points so that no segment of the polyline is longer than h.
+std::vector<Point2> resample(const std::vector<Point2>& poly, double h, bool closed) {
+  std::vector<Point2> out;
+  const size_t m = poly.size();
+  const size_t segs = closed ? m : m - 1;
+  for (size_t i = 0; i < segs; ++i) {
+    const Point2& a = poly[i];
+    const Point2& b = poly[(i + 1) % m];
+    out.push_back(a);
+    const int pieces = std::max(1, static_cast<int>(std::ceil((b - a).norm() / h - 1e-9)));
+    for (int k = 1; k < pieces; ++k) out.push_back(a + (b - a) * (static_cast<double>(k) / pieces));
+  }
+  if (!closed) out.push_back(poly.back());
+  return out;
+}
+
+bool segments_cross(const Point2& a, const Point2& b, const Point2& c, const Point2& d) {
+  // Proper or touching intersection, excluding shared endpoints.
+  if (a == c || a == d || b == c || b == d) {
+    // Shared endpoint: overlapping collinear segments still count.
+    const Point2& s = (a == c || a == d) ? a : b;
+    const Point2& o1 = s == a ? b : a;
+    const Point2& o2 = (c == s) ? d : c;
+    return orientation(s, o1, o2) == 0 && (o1 - s).dot(o2 - s) > 0;
+  }
+  return CGAL::do_intersect(K::Segment_2(cp(a), cp(b)), K::Segment_2(cp(c), cp(d)));
+}
+
+}  // namespace
+
+struct FitDomain::Impl {
+  DomainStats stats;
+  std::vector<char> excluded;
+  double grid = 0;
+  WCdt cdt;
+  std::unordered_set<uint64_t> boundary_edges;  // stable id pairs
+  int next_id = 0;
+  Domain domain;
+  std::vector<int> ids;
+  std::vector<WCdt::Vertex_handle> handle_of;  // stable id -> handle
+
+  Point2 snap(const Point2& p) const {
+    return {std::round(p.x() / grid) * grid, std::round(p.y() / grid) * grid};
+  }
+
+  void mark_domain() {
+    for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->info() = -1;
+    std::deque<std::pair<WCdt::Face_handle, int>> queue{{cdt.infinite_face(), 0}};
+    cdt.infinite_face()->info() = 0;
+    while (!queue.empty()) {
+      auto [f, level] = queue.front();
+      queue.pop_front();
+      for (int k = 0; k < 3; ++k) {
+        auto g = f->neighbor(k);
+        if (g->info() >= 0) continue;
+        const int a = f->vertex(WCdt::cw(k))->info(), b = f->vertex(WCdt::ccw(k))->info();
+        const bool crosses = !cdt.is_infinite(f->vertex(WCdt::cw(k))) &&
+                             !cdt.is_infinite(f->vertex(WCdt::ccw(k))) &&
+                             f->is_constrained(k) && boundary_edges.count(edge_key(a, b));
+        const int gl = crosses ? level + 1 : level;
+        g->info() = gl;
+        if (crosses)
+          queue.push_back({g, gl});
+        else
+          queue.push_front({g, gl});
+      }
+    }
+  }
+
+  void rebuild_domain() {
+    mark_domain();
+    std::vector<std::array<int, 3>> tris;
+    for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+      if (f->info() % 2 != 1) continue;
+      std::array<int, 3> t{f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()};
+      std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+      tris.push_back(t);
+    }
+    std::sort(tris.begin(), tris.end());
+    std::vector<int> local(next_id, -1);
+    for (const auto& t : tris)
+      for (int v : t) local[v] = 0;
+    ids.clear();
+    std::vector<Point2> verts;
+    for (int id = 0; id < next_id; ++id)
+      if (local[id] == 0) {
+        local[id] = static_cast<int>(ids.size());
+        ids.push_back(id);
+        verts.push_back(ep(handle_of[id]->point()));
+      }
+    for (auto& t : tris)
+      for (int& v : t) v = local[v];
+    std::vector<std::array<int, 2>> feats;
+    for (auto e = cdt.finite_edges_begin(); e != cdt.finite_edges_end(); ++e) {
+      auto [f, k] = *e;
+      if (!f->is_constrained(k)) continue;
+      auto g = f->neighbor(k);
+      if (f->info() % 2 != 1 || cdt.is_infinite(g) || g->info() % 2 != 1) continue;
+      const int a = local[f->vertex(WCdt::cw(k))->info()], b = local[f->vertex(WCdt::ccw(k))->info()];
+      feats.push_back({std::min(a, b), std::max(a, b)});
+    }
+    std::sort(feats.begin(), feats.end());
+    domain = Domain(std::move(verts), std::move(tris), std::move(feats));
+  }
+
+  WCdt::Vertex_handle add_vertex(const Point2& p) {
+    auto v = cdt.insert(cp(p));
+    if (v->info() < 0 || v->info() >= next_id || handle_of[v->info()] != v) {
+      v->info() = next_id++;
+      handle_of.push_back(v);
+    }
+    return v;
+  }
+};
+
+FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  const size_t n = in.uv.size();
+  if (n < 3) throw InvalidInput("a fit needs at least 3 points with parameters, got " + std::to_string(n));
+
+  Region region = in.faces.empty() ? region_from_points(in.uv) : region_from_faces(in.uv, in.faces);
+  if (!in.faces.empty()) keep_largest_component(region, in.uv);
+  m.excluded.assign(n, 1);
+  double area = 0;
+  Box2 box;
+  for (const auto& t : region.tris) {
+    area += 0.5 * signed_area2(in.uv[t[0]], in.uv[t[1]], in.uv[t[2]]);
+    for (int v : t) m.excluded[v] = 0, box.extend(in.uv[v]);
+  }
+  const double extent = std::max(box.max.x() - box.min.x(), box.max.y() - box.min.y());
+  if (!(area > 0) || !(extent > 0))
+    throw InvalidInput("the parameters (u, v) do not span an area");
+  // Vertices on a power-of-two grid: exact midpoints and dyadic fractions keep feature knots
+  // exactly collinear (knots.h, default_knots).
+  m.grid = std::ldexp(1.0, static_cast<int>(std::ceil(std::log2(extent))) - 24);
+  m.stats.grid = m.grid;
+
+  const int target = std::max(2, in.target_triangles);
+  const double h = std::sqrt(4 * area / (std::sqrt(3.0) * target));
+  m.stats.target_edge = h;
+
+  auto loops = boundary_loops(region, n);
+  std::vector<std::vector<int>> chains;
+  if (in.features) chains = feature_chains(region, in.positions, in.feature_angle_deg);
+  // Short chains are noise, not features.
+  std::erase_if(chains, [&](const std::vector<int>& c) {
+    double len = 0;
+    for (size_t i = 0; i + 1 < c.size(); ++i) len += (in.uv[c[i + 1]] - in.uv[c[i]]).norm();
+    return c.size() < 3 || len < 2 * h;
+  });
+  std::vector<char> forced(n, 0);
+  for (const auto& c : chains) forced[c.front()] = forced[c.back()] = 1;
+
+  // Simplify, offset and mesh; retry with a tighter tolerance while a point is left outside.
+  double tau = 0.1 * h;
+  for (int attempt = 0;; ++attempt) {
+    if (attempt >= 4) tau = 0;
+    m.stats.boundary_tolerance = tau;
+    // Boundary loops as polygons; `moved` holds where forced loop vertices ended up.
+    std::unordered_map<int, Point2> moved;
+    std::vector<std::vector<Point2>> polys;
+    for (const auto& loop : loops) {
+      const size_t L = loop.size();
+      std::vector<size_t> anchors;
+      for (size_t i = 0; i < L; ++i)
+        if (forced[loop[i]]) anchors.push_back(i);
+      if (anchors.empty()) {
+        size_t far = 0;
+        for (size_t i = 1; i < L; ++i)
+          if ((in.uv[loop[i]] - in.uv[loop[0]]).norm() > (in.uv[loop[far]] - in.uv[loop[0]]).norm()) far = i;
+        anchors = {0};
+        if (far != 0) anchors.push_back(far);
+      }
+      std::vector<char> keep(L, 0);
+      for (size_t a : anchors) keep[a] = 1;
+      for (size_t k = 0; k < anchors.size(); ++k) {
+        const size_t i = anchors[k], j = k + 1 < anchors.size() ? anchors[k + 1] : anchors[0] + L;
+        std::vector<Point2> piece;
+        for (size_t q = i; q <= j; ++q) piece.push_back(in.uv[loop[q % L]]);
+        std::vector<char> pk(piece.size(), 0);
+        douglas_peucker(piece, 0, piece.size() - 1, tau, pk);
+        for (size_t q = 0; q < piece.size(); ++q)
+          if (pk[q]) keep[(i + q) % L] = 1;
+      }
+      std::vector<int> kept;
+      for (size_t i = 0; i < L; ++i)
+        if (keep[i]) kept.push_back(static_cast<int>(i));
+      if (kept.size() < 3) {
+        kept.clear();
+        for (int q = 0; q < 3; ++q) kept.push_back(static_cast<int>(q * L / 3));
+      }
+      // Each kept edge must hold the dropped chain: offset it outward by its chain's largest
+      // outward distance, vertices at the mitre points of neighbouring offset lines.
+      const size_t K2 = kept.size();
+      std::vector<double> off(K2, 0);
+      std::vector<Vector2> normal(K2);
+      for (size_t e = 0; e < K2; ++e) {
+        const size_t i = kept[e], j = e + 1 < K2 ? kept[e + 1] : kept[0] + L;
+        const Point2 a = in.uv[loop[i]], b = in.uv[loop[j % L]];
+        const Vector2 d = (b - a).normalized();
+        normal[e] = Vector2(d.y(), -d.x());  // right of a -> b: outside
+        for (size_t q = i + 1; q < j; ++q) off[e] = std::max(off[e], (in.uv[loop[q % L]] - a).dot(normal[e]));
+        if (off[e] > 0) off[e] += 0.05 * tau + m.grid;
+      }
+      std::vector<Point2> poly;
+      for (size_t e = 0; e < K2; ++e) {
+        const size_t prev = (e + K2 - 1) % K2;
+        const Point2 p = in.uv[loop[kept[e]]];
+        const double d1 = off[prev], d2 = off[e];
+        Point2 q = p;
+        if (d1 > 0 || d2 > 0) {
+          // Solve n1 . x = d1, n2 . x = d2.
+          Eigen::Matrix2d A;
+          A << normal[prev].transpose(), normal[e].transpose();
+          const double det = A.determinant();
+          Vector2 x = std::fabs(det) > 1e-3 ? Vector2(A.inverse() * Vector2(d1, d2))
+                                            : Vector2((normal[prev] + normal[e]).normalized() * std::max(d1, d2));
+          const double cap = 4 * std::max(d1, d2);
+          if (x.norm() > cap) x *= cap / x.norm();
+          q = p + x;
+        }
+        poly.push_back(q);
+        if (forced[loop[kept[e]]]) moved[loop[kept[e]]] = q;
+      }
+      polys.push_back(std::move(poly));
+    }
+
+    // Feature polylines, with ends moved with the boundary.
+    std::vector<std::vector<Point2>> flines;
+    for (const auto& c : chains) {
+      std::vector<Point2> raw;
+      for (int v : c) raw.push_back(moved.count(v) ? moved[v] : in.uv[v]);
+      const bool closed = c.front() == c.back();
+      std::vector<char> keep(raw.size(), 0);
+      keep.front() = keep.back() = 1;
+      douglas_peucker(raw, 0, raw.size() - 1, 0.5 * tau, keep);
+      std::vector<Point2> line;
+      for (size_t q = 0; q < raw.size(); ++q)
+        if (keep[q]) line.push_back(raw[q]);
+      if (closed) line.pop_back();
+      flines.push_back(resample(line, h, closed));
+      if (closed) flines.back().push_back(flines.back().front());
+    }
+    for (auto& p : polys) {
+      p = resample(p, h, true);
+      for (auto& q : p) q = m.snap(q);
+    }
+    for (auto& l : flines)
+      for (auto& q : l) q = m.snap(q);
+
+    // Boundary segments must not cross; feature segments that cross the boundary or each other
+    // are dropped.
+    std::vector<std::array<Point2, 2>> bsegs;
+    std::vector<Box2> bbox;
+    for (const auto& p : polys)
+      for (size_t i = 0; i < p.size(); ++i) {
+        bsegs.push_back({p[i], p[(i + 1) % p.size()]});
+        Box2 b;
+        b.extend(p[i]);
+        b.extend(p[(i + 1) % p.size()]);
+        bbox.push_back(b);
+      }
+    detail::BoxGrid bgrid;
+    bgrid.build(bbox, bbox.size());
+    bool simple = true;
+    for (size_t i = 0; i < bsegs.size() && simple; ++i)
+      bgrid.query(bbox[i], [&](int j) {
+        if (static_cast<size_t>(j) <= i || !simple) return;
+        if (segments_cross(bsegs[i][0], bsegs[i][1], bsegs[j][0], bsegs[j][1])) simple = false;
+      });
+    if (!simple) {
+      if (tau == 0)
+        throw InvalidInput("the boundary of the parameter region crosses itself; the parameterization "
+                           "is not bijective");
+      tau *= 0.25;
+      continue;
+    }
+    std::vector<std::array<Point2, 2>> fsegs;
+    for (const auto& l : flines)
+      for (size_t i = 0; i + 1 < l.size(); ++i) {
+        if (l[i] == l[i + 1]) continue;
+        Box2 b;
+        b.extend(l[i]);
+        b.extend(l[i + 1]);
+        bool bad = false;
+        bgrid.query(b, [&](int j) {
+          if (!bad && segments_cross(l[i], l[i + 1], bsegs[j][0], bsegs[j][1])) {
+            // Touching the boundary at the feature's own end is fine.
+            const bool end_on_boundary = (l[i] == bsegs[j][0] || l[i] == bsegs[j][1] ||
+                                          l[i + 1] == bsegs[j][0] || l[i + 1] == bsegs[j][1]);
+            if (!end_on_boundary) bad = true;
+          }
+        });
+        for (const auto& s : fsegs)
+          if (!bad && segments_cross(l[i], l[i + 1], s[0], s[1])) bad = true;
+        if (!bad) fsegs.push_back({l[i], l[i + 1]});
+      }
+
+    // Constrained Delaunay triangulation and refinement to the target size.
+    MCdt mcdt;
+    std::vector<CPoint> seeds;
+    for (const auto& p : polys) {
+      std::vector<MCdt::Vertex_handle> vh;
+      for (const auto& q : p) vh.push_back(mcdt.insert(cp(q)));
+      for (size_t i = 0; i < vh.size(); ++i)
+        if (vh[i] != vh[(i + 1) % vh.size()]) mcdt.insert_constraint(vh[i], vh[(i + 1) % vh.size()]);
+    }
+    for (const auto& s : fsegs) mcdt.insert_constraint(cp(s[0]), cp(s[1]));
+    // Seeds: a point inside each hole (the loops after the outer one wind clockwise).
+    {
+      // Mark nesting levels on boundary constraints only to find faces inside holes.
+      std::unordered_set<uint64_t> bset;
+      std::map<std::pair<double, double>, int> vid;
+      for (auto v = mcdt.finite_vertices_begin(); v != mcdt.finite_vertices_end(); ++v)
+        v->info() = static_cast<int>(vid.size()), vid[{v->point().x(), v->point().y()}] = v->info();
+      for (const auto& s : bsegs) {
+        auto a = vid.find({s[0].x(), s[0].y()}), b = vid.find({s[1].x(), s[1].y()});
+        if (a != vid.end() && b != vid.end()) bset.insert(edge_key(a->second, b->second));
+      }
+      std::unordered_map<MCdt::Face_handle, int> level;
+      std::deque<std::pair<MCdt::Face_handle, int>> q{{mcdt.infinite_face(), 0}};
+      level[mcdt.infinite_face()] = 0;
+      while (!q.empty()) {
+        auto [f, l] = q.front();
+        q.pop_front();
+        for (int k = 0; k < 3; ++k) {
+          auto g = f->neighbor(k);
+          if (level.count(g)) continue;
+          auto va = f->vertex(MCdt::cw(k)), vb = f->vertex(MCdt::ccw(k));
+          const bool crosses = !mcdt.is_infinite(va) && !mcdt.is_infinite(vb) && f->is_constrained(k) &&
+                               bset.count(edge_key(va->info(), vb->info()));
+          level[g] = crosses ? l + 1 : l;
+          if (crosses)
+            q.push_back({g, l + 1});
+          else
+            q.push_front({g, l});
+        }
+      }
+      for (auto f = mcdt.finite_faces_begin(); f != mcdt.finite_faces_end(); ++f)
+        if (level[f] > 0 && level[f] % 2 == 0)
+          seeds.push_back(CGAL::centroid(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point()));
+    }
+    CGAL::refine_Delaunay_mesh_2(mcdt, seeds.begin(), seeds.end(), MCriteria(0.125, h));
+
+    // The working triangulation from snapped vertices.
+    m.cdt.clear();
+    m.boundary_edges.clear();
+    m.handle_of.clear();
+    m.next_id = 0;
+    std::unordered_map<MCdt::Vertex_handle, WCdt::Vertex_handle> map;
+    // Insert in a fixed order: by snapped coordinates.
+    std::vector<std::pair<Point2, MCdt::Vertex_handle>> order;
+    for (auto v = mcdt.finite_vertices_begin(); v != mcdt.finite_vertices_end(); ++v)
+      order.emplace_back(m.snap(ep(v->point())), v);
+    std::sort(order.begin(), order.end(), [](const auto& a, const auto& b) {
+      return a.first.x() != b.first.x() ? a.first.x() < b.first.x() : a.first.y() < b.first.y();
+    });
+    for (auto& [p, v] : order) map[v] = m.add_vertex(p);
+    for (auto e = mcdt.finite_edges_begin(); e != mcdt.finite_edges_end(); ++e) {
+      auto [f, k] = *e;
+      if (!f->is_constrained(k)) continue;
+      auto g = f->neighbor(k);
+      const bool fin = !mcdt.is_infinite(f) && f->is_in_domain();
+      const bool gin = !mcdt.is_infinite(g) && g->is_in_domain();
+      if (!fin && !gin) continue;
+      auto a = map[f->vertex(MCdt::cw(k))], b = map[f->vertex(MCdt::ccw(k))];
+      if (a == b) continue;
+      m.cdt.insert_constraint(a, b);
+      if (fin != gin) m.boundary_edges.insert(edge_key(a->info(), b->info()));
+    }
+    m.rebuild_domain();
+
+    // Every parameter point of the region must be in the domain (up to the snap).
+    size_t outside = 0;
+    WCdt::Face_handle hint;
+    for (size_t i = 0; i < n && (outside == 0 || tau > 0); ++i) {
+      if (m.excluded[i]) continue;
+      WCdt::Locate_type lt;
+      int li;
+      auto f = m.cdt.locate(cp(in.uv[i]), lt, li, hint);
+      hint = f;
+      bool in_domain = !m.cdt.is_infinite(f) && f->info() % 2 == 1;
+      if (!in_domain && (lt == WCdt::EDGE || lt == WCdt::VERTEX)) {
+        // On a boundary edge or vertex: inside in the closed sense.
+        if (lt == WCdt::EDGE) {
+          auto g = f->neighbor(li);
+          in_domain = !m.cdt.is_infinite(g) && g->info() % 2 == 1;
+        } else {
+          auto c = m.cdt.incident_faces(f->vertex(li)), done = c;
+          do {
+            if (!m.cdt.is_infinite(c) && c->info() % 2 == 1) in_domain = true;
+          } while (++c != done);
+        }
+      }
+      if (!in_domain) {
+        // Allowed: a snap away from the domain.
+        bool near = false;
+        for (int k = 0; k < 3; ++k) {
+          auto va = f->vertex(WCdt::cw(k)), vb = f->vertex(WCdt::ccw(k));
+          if (m.cdt.is_infinite(va) || m.cdt.is_infinite(vb)) continue;
+          const K::Segment_2 seg(va->point(), vb->point());
+          if (CGAL::squared_distance(seg, cp(in.uv[i])) < 16 * m.grid * m.grid) near = true;
+        }
+        if (!near) ++outside;
+      }
+    }
+    if (outside > 0 && tau > 0) {
+      tau *= 0.25;
+      continue;
+    }
+    m.stats.holes = static_cast<int>(m.domain.boundary_loops().size()) - 1;
+    m.stats.feature_chains = static_cast<int>(chains.size());
+    break;
+  }
+}
+
+FitDomain::~FitDomain() = default;
+const Domain& FitDomain::domain() const { return impl_->domain; }
+const std::vector<int>& FitDomain::ids() const { return impl_->ids; }
+const DomainStats& FitDomain::stats() const { return impl_->stats; }
+const std::vector<char>& FitDomain::excluded() const { return impl_->excluded; }
+Point2 FitDomain::snap(const Point2& p) const { return impl_->snap(p); }
+
+void FitDomain::move_vertex(int id, const Point2& p) {
+  Impl& m = *impl_;
+  auto v = m.handle_of.at(id);
+  if (ep(v->point()) == p) return;
+  const auto it = std::lower_bound(m.ids.begin(), m.ids.end(), id);
+  if (it != m.ids.end() && *it == id) m.domain.move_vertex(static_cast<int>(it - m.ids.begin()), p);
+  m.cdt.remove(v);
+  auto w = m.cdt.insert(cp(p));
+  w->info() = id;
+  m.handle_of[id] = w;
+}
+
+void FitDomain::split(std::span<const int> triangles) {
+  Impl& m = *impl_;
+  std::vector<Point2> points;
+  for (int t : triangles) {
+    const auto& tri = m.domain.triangle(t);
+    const Point2 c = (m.domain.vertex(tri[0]) + m.domain.vertex(tri[1]) + m.domain.vertex(tri[2])) / 3.0;
+    const Point2 p = m.snap(c);
+    // A snapped centroid of a tiny triangle can leave it: skip those.
+    bool inside = true;
+    for (int k = 0; k < 3; ++k)
+      if (orientation(m.domain.vertex(tri[k]), m.domain.vertex(tri[(k + 1) % 3]), p) <= 0) inside = false;
+    if (inside) points.push_back(p);
+  }
+  for (const auto& p : points) m.add_vertex(p);
+  m.rebuild_domain();
+}
+
+}  // namespace tbs::detail

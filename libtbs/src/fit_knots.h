@@ -1,0 +1,31 @@
+#pragma once
+// Internal: OptimizeKnot (paper section 4.3) by a derivative-free pattern search.
+
+#include "fit_solve.h"
+
+#include <tbs/evaluator.h>
+#include <tbs/spline.h>
+
+#include <functional>
+#include <vector>
+
+namespace tbs::detail {
+
+struct KnotSweepStats {
+  int vertices = 0;  // vertices optimised
+  int moved = 0;     // vertices whose knots changed
+  double energy_before = 0, energy_after = 0;  // sum of their local energies
+};
+
+/// One pass of OptimizeKnot(t_s) over `vertices` (domain vertex indices), in order. Moves only
+/// accepted when the local energy (points located in the 2-ring of s) falls and every knot
+/// condition still holds: primary knots of interior vertices stay inside their 1-ring (no
+/// triangle flips or collapses), sub-knots within Traas's radius r of the primary knot,
+/// boundary sub-knots outside the domain; boundary primary knots and the knots of feature
+/// vertices stay fixed. `located` is updated for points whose triangle changes;
+/// `on_primary_move(v, p)` reports primary knot moves.
+KnotSweepStats optimize_knots(Spline& spline, Evaluator& eval, std::vector<int>& located,
+                              const FitPoints& pts, double lambda, std::span<const int> vertices,
+                              const std::function<void(int, const Point2&)>& on_primary_move);
+
+}  // namespace tbs::detail

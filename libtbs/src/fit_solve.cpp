@@ -1,0 +1,272 @@
+#include "fit_solve.h"
+
+#include <tbs/errors.h>
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/SparseCore>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <numeric>
+
+namespace tbs::detail {
+
+void group_by_triangle(std::span<const int> triangle, int triangle_count, std::vector<int>& order,
+                       std::vector<int>& start) {
+  start.assign(static_cast<size_t>(triangle_count) + 1, 0);
+  for (int t : triangle)
+    if (t >= 0) ++start[t + 1];
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  order.assign(start.back(), 0);
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  for (size_t i = 0; i < triangle.size(); ++i)
+    if (triangle[i] >= 0) order[fill[triangle[i]]++] = static_cast<int>(i);
+}
+
+namespace {
+
+// Local normal equations of the points of one triangle, dense over its control points S.
+struct Local {
+  std::vector<int> S;
+  std::vector<double> G;                // m x m, data term
+  std::array<std::vector<double>, 6> F;  // m x m, fairness: xx xy xz yy yz zz
+  std::vector<double> rhs;              // m x 3
+};
+
+template <class F>
+void run(int threads, F&& f) {
+  if (threads > 0) {
+    tbb::task_arena arena(threads);
+    arena.execute(f);
+  } else {
+    f();
+  }
+}
+
+}  // namespace
+
+std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& eval,
+                                         const FitPoints& pts, double lambda, int threads) {
+  const Domain& d = spline.domain();
+  const int T = d.triangle_count();
+  const int N = spline.control_point_count();
+  const bool fair = lambda > 0;
+
+  // The control points each triangle's points touch (union of their basis rows), in parallel.
+  struct Scratch {
+    BasisRow row;
+    std::vector<int> where;
+  };
+  tbb::enumerable_thread_specific<Scratch> scratch([N] { return Scratch{{}, std::vector<int>(N, -1)}; });
+  std::vector<std::vector<int>> support(T);
+  run(threads, [&] {
+    tbb::parallel_for(0, T, [&](int t) {
+      if (pts.start[t + 1] == pts.start[t]) return;
+      Scratch& sc = scratch.local();
+      std::vector<int>& S = support[t];
+      for (int q = pts.start[t]; q < pts.start[t + 1]; ++q) {
+        if (!eval.basis_row(pts.uv[pts.order[q]], sc.row)) continue;
+        for (int j : sc.row.index)
+          if (sc.where[j] < 0) sc.where[j] = 0, S.push_back(j);
+      }
+      for (int j : S) sc.where[j] = -1;
+      std::sort(S.begin(), S.end());
+    });
+  });
+  // Pattern: rows j -> sorted columns k >= j.
+  std::vector<std::vector<int>> rows(N);
+  for (int t = 0; t < T; ++t) {
+    const auto& S = support[t];
+    for (size_t a = 0; a < S.size(); ++a)
+      rows[S[a]].insert(rows[S[a]].end(), S.begin() + static_cast<long>(a), S.end());
+  }
+  // Control-net membrane pairs.
+  std::vector<std::pair<int, int>> net;
+  {
+    const int n = spline.degree();
+    const int nb = beta_count(n);
+    for (int t = 0; t < T; ++t)
+      for (int i = 0; i < nb; ++i) {
+        const Beta b = beta_at(n, i);
+        for (int a = 0; a < 3; ++a)
+          for (int c = 0; c < 3; ++c) {
+            if (a == c || b[c] == 0) continue;
+            Beta b2 = b;
+            ++b2[a];
+            --b2[c];
+            const int j = spline.control_point_index(t, i), k = spline.control_point_index(t, b2);
+            if (j < k) net.emplace_back(j, k);
+          }
+      }
+    for (auto [j, k] : net) rows[j].push_back(k), rows[j].push_back(j), rows[k].push_back(k);
+  }
+  std::vector<size_t> row_start(static_cast<size_t>(N) + 1, 0);
+  for (int j = 0; j < N; ++j) {
+    rows[j].push_back(j);
+    std::sort(rows[j].begin(), rows[j].end());
+    rows[j].erase(std::unique(rows[j].begin(), rows[j].end()), rows[j].end());
+    row_start[j + 1] = row_start[j] + rows[j].size();
+  }
+  const size_t nnz = row_start[N];
+  std::vector<int> cols(nnz);
+  for (int j = 0; j < N; ++j) std::copy(rows[j].begin(), rows[j].end(), cols.begin() + static_cast<long>(row_start[j]));
+  rows.clear();
+  rows.shrink_to_fit();
+  std::vector<double> G(nnz, 0.0);
+  std::array<std::vector<double>, 6> F;
+  if (fair)
+    for (auto& f : F) f.assign(nnz, 0.0);
+  std::vector<double> rhs(3 * static_cast<size_t>(N), 0.0);
+
+  // Local systems in parallel, scattered in triangle order (deterministic sums).
+  constexpr int kChunk = 128;
+  std::vector<Local> locals(kChunk);
+  for (int t0 = 0; t0 < T; t0 += kChunk) {
+    const int t1 = std::min(T, t0 + kChunk);
+    run(threads, [&] {
+      tbb::parallel_for(t0, t1, [&](int t) {
+        Local& L = locals[t - t0];
+        L.S.clear();
+        if (pts.start[t + 1] == pts.start[t]) return;
+        Scratch& sc = scratch.local();
+        L.S = support[t];
+        const size_t m = L.S.size();
+        for (size_t a = 0; a < m; ++a) sc.where[L.S[a]] = static_cast<int>(a);
+        L.G.assign(m * m, 0.0);
+        if (fair)
+          for (auto& f : L.F) f.assign(m * m, 0.0);
+        L.rhs.assign(m * 3, 0.0);
+        std::vector<int> loc;
+        for (int q = pts.start[t]; q < pts.start[t + 1]; ++q) {
+          const int i = pts.order[q];
+          if (!eval.basis_row(pts.uv[i], sc.row)) continue;
+          const BasisRow& r = sc.row;
+          const size_t k = r.index.size();
+          loc.resize(k);
+          for (size_t a = 0; a < k; ++a) {
+            loc[a] = sc.where[r.index[a]];
+            if (loc[a] < 0) throw SolverError("internal: basis function outside its support set");
+          }
+          const Point3& p = pts.p[i];
+          for (size_t a = 0; a < k; ++a) {
+            const size_t ra = static_cast<size_t>(loc[a]) * m;
+            const double wa = r.value[a];
+            for (size_t b = 0; b < k; ++b) L.G[ra + loc[b]] += wa * r.value[b];
+            for (int c = 0; c < 3; ++c) L.rhs[3 * loc[a] + c] += wa * p[c];
+          }
+          if (fair) {
+            const Vector3& nv = pts.n[i];
+            const double nn[6] = {nv.x() * nv.x(), nv.x() * nv.y(), nv.x() * nv.z(),
+                                  nv.y() * nv.y(), nv.y() * nv.z(), nv.z() * nv.z()};
+            for (size_t a = 0; a < k; ++a) {
+              const size_t ra = static_cast<size_t>(loc[a]) * m;
+              for (size_t b = 0; b < k; ++b) {
+                const double g = r.du[a] * r.du[b] + r.dv[a] * r.dv[b];
+                for (int c = 0; c < 6; ++c) L.F[c][ra + loc[b]] += g * nn[c];
+              }
+            }
+          }
+        }
+        for (size_t a = 0; a < m; ++a) sc.where[L.S[a]] = -1;
+      });
+    });
+    for (int t = t0; t < t1; ++t) {
+      const Local& L = locals[t - t0];
+      const size_t m = L.S.size();
+      for (size_t a = 0; a < m; ++a) {
+        const int j = L.S[a];
+        for (int c = 0; c < 3; ++c) rhs[3 * static_cast<size_t>(j) + c] += L.rhs[3 * a + c];
+        // Columns L.S[a..] are sorted and a subset of row j's columns: merge walk.
+        size_t pos = row_start[j];
+        for (size_t b = a; b < m; ++b) {
+          while (cols[pos] != L.S[b]) ++pos;
+          // Full local matrices are symmetric; take the upper part.
+          G[pos] += L.G[a * m + b];
+          if (fair)
+            for (int c = 0; c < 6; ++c) F[c][pos] += L.F[c][a * m + b];
+        }
+      }
+    }
+  }
+
+  // Regulariser scale: the mean diagonal of the data term over reached control points.
+  double diag = 0;
+  int reached = 0;
+  for (int j = 0; j < N; ++j)
+    if (G[row_start[j]] > 0) diag += G[row_start[j]], ++reached;
+  if (reached == 0) throw SolverError("no data point lies in the domain");
+  diag /= reached;
+  const double mu = kRegularization * diag;
+  auto at = [&](int j, int k) {
+    const auto b = cols.begin() + static_cast<long>(row_start[j]);
+    const auto e = cols.begin() + static_cast<long>(row_start[j + 1]);
+    return row_start[j] + static_cast<size_t>(std::lower_bound(b, e, k) - b);
+  };
+  for (auto [j, k] : net) {
+    G[at(j, j)] += mu;
+    G[at(k, k)] += mu;
+    G[at(j, k)] -= mu;
+  }
+  // A tiny pull toward the current control points keeps the system definite in any case.
+  const double eps = 1e-6 * mu;
+  const auto& c0 = spline.control_points();
+  for (int j = 0; j < N; ++j) {
+    G[row_start[j]] += eps;
+    for (int c = 0; c < 3; ++c) rhs[3 * static_cast<size_t>(j) + c] += eps * c0[j][c];
+  }
+
+  // The 3N x 3N lower triangle, column-major: column 3j+a holds rows 3k+b for k >= j.
+  const int n3 = 3 * N;
+  std::vector<int> outer(static_cast<size_t>(n3) + 1, 0), inner;
+  std::vector<double> values;
+  inner.reserve(nnz * 9 / 2 + 3 * N);
+  values.reserve(inner.capacity());
+  static constexpr int kSym[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+  for (int j = 0; j < N; ++j)
+    for (int a = 0; a < 3; ++a) {
+      for (size_t pos = row_start[j]; pos < row_start[j + 1]; ++pos) {
+        const int k = cols[pos];
+        for (int b = (k == j ? a : 0); b < 3; ++b) {
+          double v = (a == b ? G[pos] : 0.0);
+          if (fair) v += lambda * F[kSym[a][b]][pos];
+          inner.push_back(3 * k + b);
+          values.push_back(v);
+        }
+      }
+      outer[3 * j + a + 1] = static_cast<int>(inner.size());
+    }
+  Eigen::Map<const Eigen::SparseMatrix<double>> A(n3, n3, static_cast<long>(inner.size()), outer.data(),
+                                                  inner.data(), values.data());
+  Eigen::SparseMatrix<double> M = A;
+  Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> chol;
+  chol.setMode(Eigen::CholmodSimplicialLLt);
+  chol.compute(M);
+  if (chol.info() != Eigen::Success)
+    throw SolverError("the control-point system could not be factorised (" + std::to_string(n3) +
+                      " unknowns); the data may be degenerate");
+  const Eigen::Map<const Eigen::VectorXd> b(rhs.data(), n3);
+  const Eigen::VectorXd x = chol.solve(b);
+  if (chol.info() != Eigen::Success || !x.allFinite())
+    throw SolverError("the control-point solve failed (" + std::to_string(n3) + " unknowns)");
+  std::vector<Point3> out(N);
+  for (int j = 0; j < N; ++j) out[j] = x.segment<3>(3 * j);
+  return out;
+}
+
+double local_energy(const Evaluator& eval, const FitPoints& pts, std::span<const int> points,
+                    double lambda) {
+  double e = 0;
+  for (int i : points) {
+    const SurfacePoint s = eval.evaluate(pts.uv[i]);
+    e += (pts.p[i] - s.position).squaredNorm();
+    if (lambda > 0) {
+      const double a = pts.n[i].dot(s.du), b = pts.n[i].dot(s.dv);
+      e += lambda * (a * a + b * b);
+    }
+  }
+  return e;
+}
+
+}  // namespace tbs::detail

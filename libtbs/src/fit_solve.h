@@ -1,0 +1,40 @@
+#pragma once
+// Internal: the control-point sub-problem (paper section 4.3) as one sparse SPD system.
+
+#include <tbs/evaluator.h>
+#include <tbs/spline.h>
+
+#include <span>
+#include <vector>
+
+namespace tbs::detail {
+
+/// Weight of the control-net membrane regulariser relative to the mean diagonal of the data
+/// term. It decides control points no data point reaches (holes in the data, margins) and is
+/// small enough that the fit of well-covered regions moves by about this relative amount.
+inline constexpr double kRegularization = 1e-9;
+
+struct FitPoints {
+  std::span<const Point3> p;
+  std::span<const Vector3> n;       // unit normals
+  std::span<const Point2> uv;
+  std::span<const int> triangle;    // located domain triangle per point, -1 = not used
+  std::span<const int> order;       // point indices grouped by triangle (see group_by_triangle)
+  std::span<const int> start;       // order[start[t] .. start[t+1]) are the points of t
+};
+
+/// Groups the points by triangle, in increasing index inside each group.
+void group_by_triangle(std::span<const int> triangle, int triangle_count, std::vector<int>& order,
+                       std::vector<int>& start);
+
+/// Minimises sum |p - F(u)|^2 + lambda sum (n.F_u)^2 + (n.F_v)^2 + regulariser over the control
+/// points of `spline` (knots fixed) and returns them. Deterministic for any thread count.
+/// \throw SolverError if the factorisation fails.
+std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& eval,
+                                         const FitPoints& pts, double lambda, int threads);
+
+/// sum |p - F(u)|^2 + lambda sum (n.F_u)^2 + (n.F_v)^2 over the given points.
+double local_energy(const Evaluator& eval, const FitPoints& pts, std::span<const int> points,
+                    double lambda);
+
+}  // namespace tbs::detail

@@ -1,0 +1,289 @@
+// The fitter (issue 3): reproduction, noise, free knots, creases, holes, real data, determinism.
+
+#include <tbs/errors.h>
+#include <tbs/evaluator.h>
+#include <tbs/fit.h>
+#include <tbs/io.h>
+#include <tbs/knots.h>
+#include <tbs/scan.h>
+
+#include <Eigen/Eigenvalues>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <numbers>
+#include <random>
+
+namespace tbs {
+namespace {
+
+using Surface = std::function<Point3(double, double)>;
+
+// A structured mesh over [0,1]^2 (jittered grid, column `crease_col` straight), points on f.
+Scan grid_scan(const Surface& f, int nu, int nv, double noise, uint64_t seed, bool faces = true,
+               double crease_u = -1) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> jit(-0.25, 0.25);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  Scan s;
+  s.source = "synthetic";
+  std::vector<double> us(nu), vs(nv);
+  const int cc = crease_u > 0 ? static_cast<int>(std::lround(crease_u * (nu - 1))) : -1;
+  for (int i = 0; i < nu; ++i)
+    us[i] = cc > 0 ? (i <= cc ? crease_u * i / cc : crease_u + (1 - crease_u) * (i - cc) / (nu - 1 - cc))
+                   : static_cast<double>(i) / (nu - 1);
+  for (int j = 0; j < nv; ++j) vs[j] = static_cast<double>(j) / (nv - 1);
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      double u = us[i], v = vs[j];
+      if (i > 0 && i < nu - 1 && i != cc) u += jit(rng) / (nu - 1);
+      if (j > 0 && j < nv - 1) v += jit(rng) / (nv - 1);
+      Point3 p = f(u, v);
+      if (noise > 0) p.z() += noise * gauss(rng);
+      s.positions.push_back(p);
+      s.uv.emplace_back(u, v);
+    }
+  if (faces)
+    for (int j = 0; j + 1 < nv; ++j)
+      for (int i = 0; i + 1 < nu; ++i) {
+        const int a = j * nu + i, b = a + 1, c = a + nu + 1, d = a + nu;
+        s.triangles.push_back({a, b, c});
+        s.triangles.push_back({a, c, d});
+      }
+  return s;
+}
+
+// Random bare points over [0,1]^2 minus discs.
+Scan random_scan(const Surface& f, size_t count, uint64_t seed,
+                 const std::vector<std::pair<Point2, double>>& holes = {}) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  Scan s;
+  s.source = "synthetic";
+  while (s.positions.size() < count) {
+    const Point2 uv(uni(rng), uni(rng));
+    bool in_hole = false;
+    for (const auto& [c, r] : holes) in_hole = in_hole || (uv - c).norm() < r;
+    if (in_hole) continue;
+    s.uv.push_back(uv);
+    s.positions.push_back(f(uv.x(), uv.y()));
+  }
+  return s;
+}
+
+TEST(Fit, NoParametersIsAClearError) {
+  Scan s;
+  s.source = "scan.off";
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  try {
+    fit(s, {});
+    FAIL() << "expected InvalidInput";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("scan.off: this input has no parameters"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(Fit, CollinearParametersAreRefused) {
+  Scan s;
+  for (int i = 0; i < 50; ++i) {
+    s.positions.emplace_back(i, i * i, 0);
+    s.uv.emplace_back(i, 2 * i);
+  }
+  EXPECT_THROW(fit(s, {}), InvalidInput);
+}
+
+TEST(Fit, FoldedParametersAreRefused) {
+  Scan s = grid_scan([](double u, double v) { return Point3(u, v, 0); }, 10, 10, 0, 1);
+  std::swap(s.triangles[30][1], s.triangles[30][2]);  // one face flipped in uv
+  try {
+    fit(s, {});
+    FAIL() << "expected InvalidInput";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("folds over"), std::string::npos) << e.what();
+  }
+}
+
+// A cubic polynomial surface is in the spline space of any degree-3 DMS spline: the fit must
+// reproduce it (least squares with exact normals has it as its minimiser).
+TEST(Fit, ReproducesCubicPolynomial) {
+  auto f = [](double u, double v) {
+    return Point3(u + 0.1 * v * v, v - 0.2 * u * v, 0.3 * u * u * u - 0.5 * u * v * v + 0.2 * v);
+  };
+  for (bool faces : {true, false}) {
+    Scan s = faces ? grid_scan(f, 40, 40, 0, 7) : random_scan(f, 3000, 7);
+    FitOptions o;
+    o.degree = 3;
+    o.tolerance = 1e-9;
+    o.triangles = 40;
+    o.max_iterations = 0;
+    o.fairness = 0;
+    const FitResult r = fit(s, o);
+    EXPECT_LT(r.report.max_error, 1e-8) << "faces " << faces;
+    // Also away from the data: the surface is the polynomial everywhere in the domain.
+    Evaluator ev(r.spline);
+    for (double u = 0.05; u < 1; u += 0.1)
+      for (double v = 0.05; v < 1; v += 0.1)
+        if (ev.locate({u, v}) >= 0) {
+          EXPECT_LT((ev.value({u, v}) - f(u, v)).norm(), 1e-7);
+        }
+  }
+}
+
+TEST(Fit, ReproducesWithFairnessAndExactNormals) {
+  auto f = [](double u, double v) { return Point3(u, v, 0.4 * u * u - 0.3 * u * v + 0.2 * v * v); };
+  Scan s = grid_scan(f, 30, 30, 0, 3);
+  for (size_t i = 0; i < s.uv.size(); ++i) {
+    const double u = s.uv[i].x(), v = s.uv[i].y();
+    s.normals.push_back(Vector3(-(0.8 * u - 0.3 * v), -(-0.3 * u + 0.4 * v), 1).normalized());
+  }
+  FitOptions o;
+  o.degree = 2;
+  o.tolerance = 1e-9;
+  o.triangles = 30;
+  o.max_iterations = 0;
+  o.fairness = 1e-3;
+  EXPECT_LT(fit(s, o).report.max_error, 1e-8);
+}
+
+TEST(Fit, NoisySmoothSurfaceWithinToleranceAndNoise) {
+  auto f = [](double u, double v) {
+    return Point3(u, v, 0.15 * std::sin(3 * u) * std::cos(2 * v) + 0.05 * u * v);
+  };
+  const double sigma = 1.5e-4;
+  const Scan s = grid_scan(f, 120, 120, sigma, 11, false);
+  int last_cp = 0;
+  double last_err = 1;
+  for (double tol : {1e-2, 3e-3, 1e-3}) {
+    FitOptions o;
+    o.tolerance = tol;
+    const FitResult r = fit(s, o);
+    SCOPED_TRACE(tol);
+    EXPECT_TRUE(r.report.converged) << r.report.stop_reason;
+    EXPECT_LE(r.report.max_error, tol);
+    EXPECT_GT(r.report.control_points, last_cp);
+    EXPECT_LT(r.report.max_error, last_err);
+    last_cp = r.report.control_points;
+    last_err = r.report.max_error;
+    if (tol == 1e-3) {
+      EXPECT_LE(r.report.rms_error_abs, 1.5 * sigma);
+    }
+  }
+}
+
+// A steep smooth step across the domain, oblique to any grid: knots that move to it fit
+// better than knots that stay where the default placement put them.
+TEST(Fit, FreeKnotsBeatFixedKnots) {
+  auto f = [](double u, double v) {
+    return Point3(u, v, 0.1 * std::tanh((u - 0.45 - 0.2 * v) / 0.04));
+  };
+  const Scan s = random_scan(f, 6000, 5);
+  FitOptions o;
+  o.triangles = 60;
+  o.max_iterations = 0;
+  o.fairness = 0;
+  o.tolerance = 1e-6;
+  o.knot_sweeps = 0;
+  const FitResult fixed = fit(s, o);
+  o.knot_sweeps = 2;
+  const FitResult free = fit(s, o);
+  EXPECT_EQ(free.report.control_points, fixed.report.control_points);
+  EXPECT_LT(free.report.rms_error, 0.97 * fixed.report.rms_error)
+      << "free " << free.report.rms_error << " fixed " << fixed.report.rms_error;
+}
+
+// A sheet folded by 60 degrees along u = 0.5.
+Point3 fold(double u, double v) {
+  const double slope = std::tan(std::numbers::pi / 6);
+  return Point3(u, v, 0.1 * std::sin(2 * v) - slope * std::fabs(u - 0.5));
+}
+
+TEST(Fit, CreaseIsKeptAsC0WithFewerControlPoints) {
+  const Scan s = grid_scan(fold, 81, 61, 0, 9, true, 0.5);
+  FitOptions o;
+  o.tolerance = 1e-3;
+  const FitResult with = fit(s, o);
+  o.features = false;
+  const FitResult without = fit(s, o);
+  EXPECT_TRUE(with.report.converged) << with.report.stop_reason;
+  EXPECT_LE(with.report.max_error, 1e-3);
+  EXPECT_GT(with.report.feature_edges, 0);
+  EXPECT_LT(with.report.control_points, without.report.control_points);
+
+  // The normal jumps by the fold angle across the crease and is continuous elsewhere.
+  Evaluator ev(with.spline);
+  for (double v : {0.2, 0.5, 0.8}) {
+    const Vector3 a = ev.normal({0.5 - 1e-9, v}), b = ev.normal({0.5 + 1e-9, v});
+    const double angle = std::acos(std::clamp(a.dot(b), -1.0, 1.0)) * 180 / std::numbers::pi;
+    EXPECT_NEAR(angle, 60, 2) << "v " << v;
+    for (double u : {0.2, 0.3, 0.7, 0.8}) {
+      const Vector3 c = ev.normal({u - 1e-9, v}), d = ev.normal({u + 1e-9, v});
+      EXPECT_LT(std::acos(std::clamp(c.dot(d), -1.0, 1.0)), 1e-4) << u << " " << v;
+    }
+  }
+}
+
+TEST(Fit, TwoHolesStayHoles) {
+  auto f = [](double u, double v) { return Point3(u, v, 0.1 * std::sin(2 * u + v)); };
+  const std::vector<std::pair<Point2, double>> holes{{{0.3, 0.3}, 0.12}, {{0.7, 0.65}, 0.15}};
+  const Scan s = random_scan(f, 20000, 13, holes);
+  FitOptions o;
+  o.tolerance = 1e-3;
+  const FitResult r = fit(s, o);
+  EXPECT_TRUE(r.report.converged) << r.report.stop_reason;
+  EXPECT_EQ(r.report.holes, 2);
+  Evaluator ev(r.spline);
+  for (const auto& [c, rad] : holes) {
+    EXPECT_LT(ev.locate(c), 0) << "surface invented in the hole at " << c.transpose();
+    EXPECT_LT(ev.locate(c + Point2(0.5 * rad, 0)), 0);
+  }
+  // Every point is covered.
+  size_t located = 0;
+  for (const auto& uv : r.uv) located += ev.locate(uv) >= 0;
+  EXPECT_EQ(located, s.positions.size());
+  for (double e : r.error) EXPECT_FALSE(std::isnan(e));
+}
+
+TEST(Fit, DeterministicForAnyThreadCount) {
+  const Scan s = grid_scan(fold, 41, 41, 1e-4, 4, true, 0.5);
+  FitOptions o;
+  o.tolerance = 2e-3;
+  o.threads = 1;
+  const FitResult a = fit(s, o);
+  o.threads = 2;
+  const FitResult b = fit(s, o);
+  SplineFile fa{a.spline, "mm", a.report.to_json(false)};
+  SplineFile fb{b.spline, "mm", b.report.to_json(false)};
+  EXPECT_EQ(format_tbs(fa), format_tbs(fb));
+}
+
+// Real data: CGAL's mesh_with_border.off, parameterized in the test by projection on its
+// best-fitting plane.
+TEST(Fit, RealMeshWithBorder) {
+  const std::string tarball = "/usr/share/doc/libcgal-dev/data.tar.gz";
+  if (!std::filesystem::exists(tarball)) GTEST_SKIP() << "libcgal-demo is not installed";
+  const auto dir = std::filesystem::temp_directory_path() / "tbs_fit_test_data";
+  std::filesystem::create_directories(dir);
+  const std::string cmd = "tar xzf " + tarball + " -C " + dir.string() + " data/meshes/mesh_with_border.off";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  Scan s = read_scan((dir / "data/meshes/mesh_with_border.off").string());
+  Point3 c = Point3::Zero();
+  for (const auto& p : s.positions) c += p;
+  c /= static_cast<double>(s.positions.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const auto& p : s.positions) cov += (p - c) * (p - c).transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+  const Vector3 e1 = es.eigenvectors().col(2), e2 = es.eigenvectors().col(1);
+  for (const auto& p : s.positions) s.uv.emplace_back((p - c).dot(e1), (p - c).dot(e2));
+  FitOptions o;
+  o.tolerance = 1e-3;
+  const FitResult r = fit(s, o);
+  EXPECT_TRUE(r.report.converged) << r.report.stop_reason << " max error " << r.report.max_error;
+  EXPECT_LE(r.report.max_error, 1e-3);
+}
+
+}  // namespace
+}  // namespace tbs
