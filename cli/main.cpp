@@ -67,8 +67,8 @@ int main(int argc, char** argv) {
                  ->check(CLI::Range(0.0, 180.0))->capture_default_str();
   fit_cmd->add_flag("--no-features", fit.no_features, "Do not detect sharp features")->excludes(fa);
   fit_cmd->add_option("--max-control-points", fit.max_control_points,
-                      "Stop refining before exceeding this many control points (default: half "
-                      "the points)")
+                      "Stop refining before exceeding this many control points (default: the "
+                      "number of points)")
       ->check(CLI::PositiveNumber);
   fit_cmd->add_option("--max-iterations", fit.max_iterations, "Most refinement rounds")
       ->check(CLI::NonNegativeNumber)->capture_default_str();

@@ -182,7 +182,7 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
   const double uv_size = std::max(uvbox.max.x() - uvbox.min.x(), uvbox.max.y() - uvbox.min.y());
   const double lambda = opt.fairness * uv_size * uv_size;
   const size_t max_cp = opt.max_control_points > 0 ? static_cast<size_t>(opt.max_control_points)
-                                                   : std::max<size_t>(N / 2, 16);
+                                                   : std::max<size_t>(N, 16);
 
   std::vector<Point2> uv(scan.uv.begin(), scan.uv.end());
   std::vector<int> located(N, -1);

@@ -349,6 +349,20 @@ std::vector<int> feature_servers(const Domain& d) {
     else if (eligible(q, p))
       server[q] = p;
   }
+  // Every other feature vertex puts its sub-knots on one of its feature lines too. One server
+  // per edge already makes the edge C^0, but then only the basis functions near the serving
+  // end carry the kink: the crease fades toward the other end. With both ends on the line
+  // the whole edge can kink (the paper's feature constraint: every feature vertex's sub-knots
+  // lie on a feature edge).
+  for (const auto& [p, q] : order)
+    for (auto [a, b] : {std::pair{p, q}, std::pair{q, p}}) {
+      if (server[a] >= 0) continue;
+      if (d.is_boundary_vertex(a)) {
+        const Point2 out = d.vertex(a) + (d.vertex(a) - d.vertex(b));
+        if (!strictly_outside_wedge_ok(d, a, out)) continue;
+      }
+      server[a] = b;
+    }
   return server;
 }
 
@@ -424,7 +438,11 @@ std::vector<int> edge_continuity(const Domain& d, int n, std::span<const Point2>
           for (int l = 0; l <= std::min(b[j], n - 1); ++l) count += on[j][l];
         mu = std::max(mu, count);
       }
-      result[e] = std::min(result[e], std::min(n - 1, n + 1 - mu));
+      // n + 2 collinear knots make single basis functions jump across the line, but not the
+      // surface: with both ends of a feature edge serving it, the jumps of the basis functions
+      // of the two triangles cancel (continuity_test checks value jumps below 1e-12 for random
+      // control points). The bound is therefore never below C^0.
+      result[e] = std::min(result[e], std::max(0, std::min(n - 1, n + 1 - mu)));
     }
   }
   return result;

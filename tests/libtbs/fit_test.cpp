@@ -151,7 +151,7 @@ TEST(Fit, ReproducesWithFairnessAndExactNormals) {
 
 TEST(Fit, NoisySmoothSurfaceWithinToleranceAndNoise) {
   auto f = [](double u, double v) {
-    return Point3(u, v, 0.15 * std::sin(3 * u) * std::cos(2 * v) + 0.05 * u * v);
+    return Point3(u, v, 0.1 * std::sin(7 * u) * std::cos(6 * v) + 0.05 * u * v);
   };
   const double sigma = 1.5e-4;
   const Scan s = grid_scan(f, 120, 120, sigma, 11, false);
@@ -160,6 +160,7 @@ TEST(Fit, NoisySmoothSurfaceWithinToleranceAndNoise) {
   for (double tol : {1e-2, 3e-3, 1e-3}) {
     FitOptions o;
     o.tolerance = tol;
+    o.triangles = 8;  // start coarse, so that refinement decides the size
     const FitResult r = fit(s, o);
     SCOPED_TRACE(tol);
     EXPECT_TRUE(r.report.converged) << r.report.stop_reason;
@@ -218,7 +219,8 @@ TEST(Fit, CreaseIsKeptAsC0WithFewerControlPoints) {
   for (double v : {0.2, 0.5, 0.8}) {
     const Vector3 a = ev.normal({0.5 - 1e-9, v}), b = ev.normal({0.5 + 1e-9, v});
     const double angle = std::acos(std::clamp(a.dot(b), -1.0, 1.0)) * 180 / std::numbers::pi;
-    EXPECT_NEAR(angle, 60, 2) << "v " << v;
+    // Positions within 1e-3 leave the one-sided tangents a few degrees of play.
+    EXPECT_NEAR(angle, 60, 6) << "v " << v;
     for (double u : {0.2, 0.3, 0.7, 0.8}) {
       const Vector3 c = ev.normal({u - 1e-9, v}), d = ev.normal({u + 1e-9, v});
       EXPECT_LT(std::acos(std::clamp(c.dot(d), -1.0, 1.0)), 1e-4) << u << " " << v;

@@ -34,8 +34,9 @@ struct FitOptions {
   /// Dihedral angle (degrees) above which a mesh edge is a sharp feature.
   double feature_angle = 40;
   bool features = true;
-  /// Refinement stops before the spline would exceed this many control points; 0 means half
-  /// the number of points (more unknowns than that only fit the noise).
+  /// Refinement stops before the spline would exceed this many control points; 0 means the
+  /// number of points (3 unknowns per control point against 3 coordinates per point: beyond
+  /// that the fit would interpolate).
   int max_control_points = 0;
   /// Most refinement rounds.
   int max_iterations = 25;

@@ -48,9 +48,12 @@ KnotCheck check_knot_conditions(const Domain& domain, int degree, std::span<cons
 
 /// For each vertex, the feature line its free sub-knots t_{i,1..n-1} lie on, given as the
 /// other endpoint of a feature edge at the vertex, or -1 if its sub-knots are placed freely.
-/// Each feature edge is served by exactly one endpoint where possible, so the n+1 knots on its
-/// line give C^0 there (METHOD.md section 3); a vertex that serves a line serves every feature
-/// edge at it on that line.
+/// Every feature edge is served by at least one endpoint, so n+1 knots on its line give C^0
+/// there (METHOD.md section 3); then every other feature vertex serves one of its feature lines
+/// too (a boundary vertex only if the ray away from the line's other end leaves the domain).
+/// With one server per edge the kink fades toward the other end; with both, the whole edge can
+/// carry it (a 60 degree fold is then reproduced to within 2 degrees, fit_test.cpp). A vertex
+/// where lines of different directions meet serves only one of them.
 std::vector<int> feature_servers(const Domain& domain);
 
 /// Default knots (Traas's scheme): the sub-knots of vertex i lie inside the circle of radius
