@@ -242,7 +242,6 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
                             std::to_string(spline.control_point_count()) + " control points",
                0);
       spline.control_points() = detail::solve_control_points(spline, eval, make_points(), lambda, opt.threads);
-      eval = Evaluator(spline);
       stage["solve"] += seconds_since(ts);
     };
     solve();
@@ -289,7 +288,8 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
                  0);
         const auto pts = make_points();
         const auto st = detail::optimize_knots(spline, eval, located, pts, lambda, verts,
-                                               [&](int v, const Point2& p) { fdom.move_vertex(fdom.ids()[v], p); });
+                                               [&](int v, const Point2& p) { fdom.move_vertex(fdom.ids()[v], p); },
+                                               opt.threads);
         stage["knots"] += seconds_since(ts);
         if (st.moved == 0) break;
         solve();

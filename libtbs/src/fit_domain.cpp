@@ -478,7 +478,7 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
   for (const auto& c : chains) forced[c.front()] = forced[c.back()] = 1;
 
   // Simplify, offset and mesh; retry with a tighter tolerance while a point is left outside.
-  double tau = 0.1 * h;
+  double tau = 0.5 * h;
   for (int attempt = 0;; ++attempt) {
     if (attempt >= 4) tau = 0;
     m.stats.boundary_tolerance = tau;
@@ -564,11 +564,11 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
       for (size_t q = 0; q < raw.size(); ++q)
         if (keep[q]) line.push_back(raw[q]);
       if (closed) line.pop_back();
-      flines.push_back(resample(line, h, closed));
+      flines.push_back(resample(line, 1.2 * h, closed));
       if (closed) flines.back().push_back(flines.back().front());
     }
     for (auto& p : polys) {
-      p = resample(p, h, true);
+      p = resample(p, 1.2 * h, true);
       for (auto& q : p) q = m.snap(q);
     }
     for (auto& l : flines)
@@ -666,7 +666,7 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
         if (level[f] > 0 && level[f] % 2 == 0)
           seeds.push_back(CGAL::centroid(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point()));
     }
-    CGAL::refine_Delaunay_mesh_2(mcdt, seeds.begin(), seeds.end(), MCriteria(0.125, h));
+    CGAL::refine_Delaunay_mesh_2(mcdt, seeds.begin(), seeds.end(), MCriteria(0.125, 1.4 * h));
 
     // The working triangulation from snapped vertices.
     m.cdt.clear();

@@ -17,7 +17,10 @@ struct KnotSweepStats {
   double energy_before = 0, energy_after = 0;  // sum of their local energies
 };
 
-/// One pass of OptimizeKnot(t_s) over `vertices` (domain vertex indices), in order. Moves only
+/// One pass of OptimizeKnot(t_s) over `vertices` (domain vertex indices). Vertices fewer than
+/// 4 edges apart get different colours; each colour class runs in parallel (`threads`, 0 = all
+/// cores) on per-worker copies of the spline, so the result does not depend on the thread
+/// count: a vertex's search sees only the state at the start of its class. Moves only
 /// accepted when the local energy (points located in the 2-ring of s) falls and every knot
 /// condition still holds: primary knots of interior vertices stay inside their 1-ring (no
 /// triangle flips or collapses), sub-knots within Traas's radius r of the primary knot,
@@ -26,6 +29,7 @@ struct KnotSweepStats {
 /// `on_primary_move(v, p)` reports primary knot moves.
 KnotSweepStats optimize_knots(Spline& spline, Evaluator& eval, std::vector<int>& located,
                               const FitPoints& pts, double lambda, std::span<const int> vertices,
-                              const std::function<void(int, const Point2&)>& on_primary_move);
+                              const std::function<void(int, const Point2&)>& on_primary_move,
+                              int threads);
 
 }  // namespace tbs::detail

@@ -175,5 +175,83 @@ TEST(Cli, InfoOnInvalidKnotsReportsAndFails) {
   EXPECT_NE(e.err.find("knot conditions"), std::string::npos) << e.err;
 }
 
+
+std::string scan_path() { return std::string(TBS_SOURCE_DIR) + "/samples/bracket.ply"; }
+
+TEST(CliFit, BundledScanIsReproducibleFromItsScript) {
+  const fs::path out = temp_dir() / "bracket.ply";
+  const std::string cmd = "python3 '" + std::string(TBS_SOURCE_DIR) + "/samples/make_scan.py' '" +
+                          out.string() + "' > /dev/null";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  EXPECT_EQ(read_file(out.string()), read_file(scan_path()));
+}
+
+TEST(CliFit, FitsTheBundledScanAndWritesReport) {
+  const fs::path dir = temp_dir();
+  const fs::path out = dir / "bracket.tbs", rep = dir / "report.json";
+  const Result r = run("fit '" + scan_path() + "' -o '" + out.string() + "' --units mm --report '" +
+                       rep.string() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  // Progress lines on stderr (not a terminal here), the table on stdout.
+  EXPECT_NE(r.err.find("[solve]"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("control points"), std::string::npos) << r.out;
+  const json j = json::parse(read_file(rep.string()));
+  for (const char* k : {"points", "degree", "domain_triangles", "control_points", "max_error",
+                        "rms_error", "max_error_abs", "rms_error_abs", "tolerance", "converged",
+                        "seconds", "stage_seconds"})
+    EXPECT_TRUE(j.contains(k)) << k;
+  EXPECT_TRUE(j["converged"].get<bool>());
+  EXPECT_LE(j["max_error"].get<double>(), 1e-3);
+  EXPECT_GT(j["feature_edges"].get<int>(), 0);
+  EXPECT_EQ(j["holes"].get<int>(), 1);
+  // The .tbs holds the report without times, and is a valid spline.
+  const SplineFile f = read_tbs(out.string());
+  EXPECT_EQ(f.units, "mm");
+  const json meta = json::parse(f.metadata_json);
+  EXPECT_EQ(meta["fit"]["control_points"], j["control_points"]);
+  EXPECT_FALSE(meta["fit"].contains("seconds"));
+  EXPECT_EQ(f.spline.control_point_count(), j["control_points"].get<int>());
+}
+
+TEST(CliFit, SameBytesForAnyThreadCount) {
+  const fs::path dir = temp_dir();
+  const fs::path a = dir / "t1.tbs", b = dir / "t2.tbs";
+  ASSERT_EQ(run("fit '" + scan_path() + "' -o '" + a.string() + "' -q --threads 1").code, 0);
+  ASSERT_EQ(run("fit '" + scan_path() + "' -o '" + b.string() + "' -q --threads 2").code, 0);
+  EXPECT_EQ(read_file(a.string()), read_file(b.string()));
+}
+
+TEST(CliFit, InputWithoutParametersIsRefused) {
+  const fs::path dir = temp_dir();
+  const fs::path in = dir / "plain.xyz", out = dir / "plain.tbs";
+  {
+    std::ofstream f(in);
+    for (int i = 0; i < 20; ++i) f << i << " " << i * i % 7 << " " << i % 3 << "\n";
+  }
+  const Result r = run("fit '" + in.string() + "' -o '" + out.string() + "'");
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("plain.xyz: this input has no parameters"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(CliFit, BadOptionsAndFiles) {
+  const fs::path dir = temp_dir();
+  const std::string out = (dir / "x.tbs").string();
+  EXPECT_EQ(run("fit '" + scan_path() + "' -o '" + out + "' --degree 0").code, 2);
+  EXPECT_EQ(run("fit '" + scan_path() + "' -o '" + out + "' --tolerance -1").code, 2);
+  EXPECT_EQ(run("fit '" + scan_path() + "' -o '" + out + "' --feature-angle 30 --no-features").code, 2);
+  EXPECT_EQ(run("fit '" + scan_path() + "'").code, 2);  // no -o
+  const Result missing = run("fit '" + (dir / "missing.ply").string() + "' -o '" + out + "'");
+  EXPECT_EQ(missing.code, 4);
+  EXPECT_NE(missing.err.find("missing.ply"), std::string::npos) << missing.err;
+  // Never over its own input.
+  const fs::path copy = dir / "copy.ply";
+  fs::copy_file(scan_path(), copy, fs::copy_options::overwrite_existing);
+  const Result self = run("fit '" + copy.string() + "' -o '" + copy.string() + "'");
+  EXPECT_EQ(self.code, 3);
+  EXPECT_EQ(read_file(copy.string()), read_file(scan_path()));
+  EXPECT_FALSE(fs::exists(out));
+}
+
 }  // namespace
 }  // namespace tbs
