@@ -37,7 +37,7 @@ struct FitCommandOptions {
   double tolerance = 1e-3;
   double tolerance_abs = 0;
   int triangles = 0;
-  double fairness = 1e-5;
+  double fairness = 1e-3;
   double feature_angle = 40;
   bool no_features = false;
   int max_control_points = 0;

@@ -176,11 +176,11 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
   detail::FitDomain fdom(din);
   stage["domain"] += seconds_since(t0);
 
-  Box2 uvbox;
-  for (size_t i = 0; i < N; ++i)
-    if (!fdom.excluded()[i]) uvbox.extend(scan.uv[i]);
-  const double uv_size = std::max(uvbox.max.x() - uvbox.min.x(), uvbox.max.y() - uvbox.min.y());
-  const double lambda = opt.fairness * uv_size * uv_size;
+  // The fairness term of a point is weighted by the squared longest edge of its domain
+  // triangle: (h n.F_u)^2 is a length, like the distance term, so the weight is dimensionless
+  // and does not grow stronger as refinement shrinks the triangles.
+  const double lambda = opt.fairness;
+  std::vector<double> fair(N, 0.0);
   const size_t max_cp = opt.max_control_points > 0 ? static_cast<size_t>(opt.max_control_points)
                                                    : std::max<size_t>(N, 16);
 
@@ -233,8 +233,24 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
     stage["domain"] += seconds_since(t0);
 
     auto make_points = [&] {
-      detail::group_by_triangle(located, spline.domain().triangle_count(), order, start);
-      return detail::FitPoints{scan.positions, normals, uv, located, order, start};
+      const Domain& d = spline.domain();
+      detail::group_by_triangle(located, d.triangle_count(), order, start);
+      // Estimated normals average the two sides of a crease: no fairness next to features.
+      std::vector<char> at_feature(d.vertex_count(), 0);
+      if (rep.normals_estimated)
+        for (const auto& e : d.feature_edges()) at_feature[e[0]] = at_feature[e[1]] = 1;
+      for (size_t i = 0; i < N; ++i) {
+        if (located[i] < 0) continue;
+        const auto& t = d.triangle(located[i]);
+        if (at_feature[t[0]] || at_feature[t[1]] || at_feature[t[2]]) {
+          fair[i] = 0;
+          continue;
+        }
+        double h2 = 0;
+        for (int k = 0; k < 3; ++k) h2 = std::max(h2, (d.vertex(t[k]) - d.vertex(t[(k + 1) % 3])).squaredNorm());
+        fair[i] = h2;
+      }
+      return detail::FitPoints{scan.positions, normals, uv, located, order, start, fair};
     };
     auto solve = [&] {
       const auto ts = Clock::now();

@@ -15,6 +15,8 @@
 #include <CGAL/Triangulation_face_base_with_info_2.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -306,6 +308,114 @@ std::vector<std::vector<int>> feature_chains(const Region& r, std::span<const Po
   return chains;
 }
 
+// Creases that no edge follows (bare points, or meshes whose edges cross the crease): the
+// triangles straddling a crease share its angle between several edges, none of them sharp. A
+// band of edges bent by more than a third of the feature angle, long and thin, whose two sides
+// have normals more than the feature angle apart, is a crease; its centre line (centroids of
+// the band's triangles, averaged in bins along the band's main axis) goes into the domain.
+std::vector<std::vector<Point2>> band_creases(const Region& r, std::span<const Point2> uv,
+                                              std::span<const Point3> pos, double angle_deg,
+                                              double h, const std::unordered_set<uint64_t>& taken) {
+  std::unordered_map<uint64_t, std::array<int, 2>> edge_faces;
+  for (size_t f = 0; f < r.tris.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      auto [it, fresh] = edge_faces.try_emplace(edge_key(r.tris[f][k], r.tris[f][(k + 1) % 3]),
+                                                std::array<int, 2>{static_cast<int>(f), -1});
+      if (!fresh) it->second[1] = static_cast<int>(f);
+    }
+  const size_t F = r.tris.size();
+  std::vector<Vector3> fn(F);
+  std::vector<Point2> centroid(F);
+  for (size_t f = 0; f < F; ++f) {
+    const auto& t = r.tris[f];
+    const Vector3 nrm = (pos[t[1]] - pos[t[0]]).cross(pos[t[2]] - pos[t[0]]);
+    fn[f] = nrm.norm() > 0 ? Vector3(nrm.normalized()) : Vector3::Zero();
+    centroid[f] = (uv[t[0]] + uv[t[1]] + uv[t[2]]) / 3.0;
+  }
+  const double cos_band = std::cos(angle_deg / 3 * std::numbers::pi / 180);
+  const double cos_crease = std::cos(angle_deg * std::numbers::pi / 180);
+  std::vector<char> band(F, 0);
+  std::vector<std::pair<uint64_t, std::array<int, 2>>> band_edges;
+  for (const auto& [key, ef] : edge_faces) {
+    if (ef[1] < 0 || taken.count(key) || fn[ef[0]].isZero() || fn[ef[1]].isZero()) continue;
+    if (fn[ef[0]].dot(fn[ef[1]]) >= cos_band) continue;
+    band[ef[0]] = band[ef[1]] = 1;
+    band_edges.push_back({key, ef});
+  }
+  // Components of band triangles (through any shared edge), in a fixed order.
+  std::vector<int> comp(F, -1);
+  std::vector<std::vector<int>> comps;
+  // Band triangles sharing a vertex are neighbours (a crease passing near a vertex leaves
+  // gaps between edge-adjacent ones).
+  std::vector<std::vector<int>> fadj(F);
+  {
+    std::unordered_map<int, std::vector<int>> at_vertex;
+    for (size_t f = 0; f < F; ++f)
+      if (band[f])
+        for (int v : r.tris[f]) at_vertex[v].push_back(static_cast<int>(f));
+    for (const auto& [v, fs] : at_vertex)
+      for (size_t a = 0; a + 1 < fs.size(); ++a) fadj[fs[a]].push_back(fs[a + 1]), fadj[fs[a + 1]].push_back(fs[a]);
+  }
+  for (size_t f = 0; f < F; ++f) {
+    if (!band[f] || comp[f] >= 0) continue;
+    comps.emplace_back();
+    std::vector<int> stack{static_cast<int>(f)};
+    comp[f] = static_cast<int>(comps.size()) - 1;
+    while (!stack.empty()) {
+      const int g = stack.back();
+      stack.pop_back();
+      comps.back().push_back(g);
+      for (int q : fadj[g])
+        if (comp[q] < 0) comp[q] = comp[f], stack.push_back(q);
+    }
+    std::sort(comps.back().begin(), comps.back().end());
+  }
+  std::vector<std::vector<Point2>> lines;
+  for (const auto& c : comps) {
+    if (c.size() < 8) continue;
+    Point2 mean = Point2::Zero();
+    for (int f : c) mean += centroid[f];
+    mean /= static_cast<double>(c.size());
+    Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+    for (int f : c) cov += (centroid[f] - mean) * (centroid[f] - mean).transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(cov);
+    const Vector2 axis = es.eigenvectors().col(1), side(-axis.y(), axis.x());
+    double tmin = 1e300, tmax = -1e300, wmax = 0;
+    for (int f : c) {
+      const double t = (centroid[f] - mean).dot(axis);
+      tmin = std::min(tmin, t), tmax = std::max(tmax, t);
+      wmax = std::max(wmax, std::fabs((centroid[f] - mean).dot(side)));
+    }
+    const double length = tmax - tmin;
+    if (length < 2 * h || 2 * wmax > 0.25 * length) continue;
+    // The two sides: non-band triangles next to the band.
+    Vector3 nl = Vector3::Zero(), nr = Vector3::Zero();
+    for (int f : c)
+      for (int k = 0; k < 3; ++k) {
+        const auto& ef = edge_faces[edge_key(r.tris[f][k], r.tris[f][(k + 1) % 3])];
+        const int g = ef[0] == f ? ef[1] : ef[0];
+        if (g < 0 || band[g]) continue;
+        ((centroid[g] - mean).dot(side) < 0 ? nl : nr) += fn[g];
+      }
+    if (nl.isZero() || nr.isZero() || nl.normalized().dot(nr.normalized()) >= cos_crease) continue;
+    // Centre line: centroids averaged in bins of h / 2 along the axis.
+    const int bins = std::max(3, static_cast<int>(std::ceil(length / (0.5 * h))));
+    std::vector<Point2> sum(bins, Point2::Zero());
+    std::vector<int> count(bins, 0);
+    for (int f : c) {
+      const double t = (centroid[f] - mean).dot(axis);
+      const int b = std::min(bins - 1, static_cast<int>((t - tmin) / length * bins));
+      sum[b] += centroid[f];
+      ++count[b];
+    }
+    std::vector<Point2> line;
+    for (int b = 0; b < bins; ++b)
+      if (count[b] > 0) line.push_back(sum[b] / count[b]);
+    if (line.size() >= 2) lines.push_back(std::move(line));
+  }
+  return lines;
+}
+
 // Douglas-Peucker on an open polyline; keeps the ends.
 void douglas_peucker(std::span<const Point2> p, size_t i, size_t j, double tol, std::vector<char>& keep) {
   if (j <= i + 1) return;
@@ -476,6 +586,13 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
   });
   std::vector<char> forced(n, 0);
   for (const auto& c : chains) forced[c.front()] = forced[c.back()] = 1;
+  std::vector<std::vector<Point2>> bands;
+  if (in.features) {
+    std::unordered_set<uint64_t> taken;
+    for (const auto& c : chains)
+      for (size_t i = 0; i + 1 < c.size(); ++i) taken.insert(edge_key(c[i], c[i + 1]));
+    bands = band_creases(region, in.uv, in.positions, in.feature_angle_deg, h, taken);
+  }
 
   // Simplify, offset and mesh; retry with a tighter tolerance while a point is left outside.
   double tau = 0.5 * h;
@@ -567,10 +684,46 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
       flines.push_back(resample(line, 1.2 * h, closed));
       if (closed) flines.back().push_back(flines.back().front());
     }
-    for (auto& p : polys) {
-      p = resample(p, 1.2 * h, true);
-      for (auto& q : p) q = m.snap(q);
+    for (auto& p : polys) p = resample(p, 1.2 * h, true);
+    // Band creases: each end that stops within 2 h of the boundary is extended to it, and the
+    // boundary gets a vertex there.
+    for (const auto& b : bands) {
+      std::vector<Point2> line = b;
+      for (int end = 0; end < 2; ++end) {
+        const Point2 tip = end == 0 ? line.front() : line.back();
+        const Point2 prev = end == 0 ? line[1] : line[line.size() - 2];
+        const Vector2 dir = (tip - prev).normalized();
+        const Point2 far = tip + 2 * h * dir;
+        double best = 1e300;
+        size_t bl = 0, bi = 0;
+        Point2 hit;
+        for (size_t l = 0; l < polys.size(); ++l)
+          for (size_t i = 0; i < polys[l].size(); ++i) {
+            const Point2& a = polys[l][i];
+            const Point2& c = polys[l][(i + 1) % polys[l].size()];
+            const double d1 = det3(a, c, tip), d2 = det3(a, c, far);
+            const double e1 = det3(tip, far, a), e2 = det3(tip, far, c);
+            if ((d1 > 0) == (d2 > 0) || (e1 > 0) == (e2 > 0)) continue;
+            const double s = d1 / (d1 - d2);
+            if (s < best) best = s, bl = l, bi = i, hit = tip + s * (far - tip);
+          }
+        if (best > 1) continue;
+        polys[bl].insert(polys[bl].begin() + static_cast<long>(bi) + 1, hit);
+        if (end == 0)
+          line.insert(line.begin(), hit);
+        else
+          line.push_back(hit);
+      }
+      std::vector<char> keep(line.size(), 0);
+      keep.front() = keep.back() = 1;
+      douglas_peucker(line, 0, line.size() - 1, 0.1 * h, keep);
+      std::vector<Point2> simple;
+      for (size_t q = 0; q < line.size(); ++q)
+        if (keep[q]) simple.push_back(line[q]);
+      flines.push_back(resample(simple, 1.2 * h, false));
     }
+    for (auto& p : polys)
+      for (auto& q : p) q = m.snap(q);
     for (auto& l : flines)
       for (auto& q : l) q = m.snap(q);
 
@@ -735,7 +888,7 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
       continue;
     }
     m.stats.holes = static_cast<int>(m.domain.boundary_loops().size()) - 1;
-    m.stats.feature_chains = static_cast<int>(chains.size());
+    m.stats.feature_chains = static_cast<int>(chains.size() + bands.size());
     break;
   }
 }
@@ -760,19 +913,44 @@ void FitDomain::move_vertex(int id, const Point2& p) {
 }
 
 void FitDomain::split(std::span<const int> triangles) {
+  // Longest-edge bisection: each triangle gets a vertex at the midpoint of its longest edge
+  // (centroids would leave long boundary edges alone and make slivers along them). Midpoints
+  // of boundary and feature edges are exact (no snap), so those lines stay straight.
   Impl& m = *impl_;
-  std::vector<Point2> points;
+  const Domain& d = m.domain;
+  std::vector<int> edges;
   for (int t : triangles) {
-    const auto& tri = m.domain.triangle(t);
-    const Point2 c = (m.domain.vertex(tri[0]) + m.domain.vertex(tri[1]) + m.domain.vertex(tri[2])) / 3.0;
-    const Point2 p = m.snap(c);
-    // A snapped centroid of a tiny triangle can leave it: skip those.
-    bool inside = true;
-    for (int k = 0; k < 3; ++k)
-      if (orientation(m.domain.vertex(tri[k]), m.domain.vertex(tri[(k + 1) % 3]), p) <= 0) inside = false;
-    if (inside) points.push_back(p);
+    int best = -1;
+    double len = -1;
+    for (int k = 0; k < 3; ++k) {
+      const int e = d.triangle_edge(t, k);
+      const auto& ev = d.edges()[e];
+      const double l = (d.vertex(ev[0]) - d.vertex(ev[1])).squaredNorm();
+      if (l > len) len = l, best = e;
+    }
+    edges.push_back(best);
   }
-  for (const auto& p : points) m.add_vertex(p);
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  std::vector<std::pair<int, int>> boundary_splits;  // stable ids of split boundary edges
+  std::vector<Point2> points;
+  for (int e : edges) {
+    const auto& ev = d.edges()[e];
+    const Point2 mid = 0.5 * (d.vertex(ev[0]) + d.vertex(ev[1]));
+    const bool constrained = d.is_boundary_edge(e) || d.is_feature_edge(e);
+    points.push_back(constrained ? mid : m.snap(mid));
+    boundary_splits.emplace_back(d.is_boundary_edge(e) ? m.ids[ev[0]] : -1, m.ids[ev[1]]);
+  }
+  for (size_t q = 0; q < points.size(); ++q) {
+    const int before = m.next_id;
+    auto v = m.add_vertex(points[q]);
+    if (m.next_id == before) continue;  // an existing vertex
+    const auto [a, b] = boundary_splits[q];
+    if (a >= 0 && m.boundary_edges.erase(edge_key(a, b))) {
+      m.boundary_edges.insert(edge_key(a, v->info()));
+      m.boundary_edges.insert(edge_key(v->info(), b));
+    }
+  }
   m.rebuild_domain();
 }
 

@@ -42,8 +42,9 @@ class FitDomain {
   /// Input points that are not in the parameter region (outliers of bare point sets).
   const std::vector<char>& excluded() const;
 
-  /// Inserts vertices (snapped to the grid) inside the given domain triangles, at their
-  /// centroids, keeps the constrained Delaunay property (edge flips), and rebuilds domain().
+  /// Refines the given domain triangles by longest-edge bisection (a vertex at the midpoint
+  /// of each one's longest edge; exact on boundary and feature edges, snapped elsewhere), keeps
+  /// the constrained Delaunay property (edge flips), and rebuilds domain().
   void split(std::span<const int> triangles);
 
   /// Moves the vertex with stable id `id` (an interior vertex on no constraint) to p, as

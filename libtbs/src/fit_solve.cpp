@@ -9,6 +9,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 
 namespace tbs::detail {
@@ -157,7 +158,7 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
             for (int c = 0; c < 3; ++c) L.rhs[3 * loc[a] + c] += wa * p[c];
           }
           if (fair) {
-            const Vector3& nv = pts.n[i];
+            const Vector3 nv = pts.n[i] * std::sqrt(pts.fair_weight(i));
             const double nn[6] = {nv.x() * nv.x(), nv.x() * nv.y(), nv.x() * nv.z(),
                                   nv.y() * nv.y(), nv.y() * nv.z(), nv.z() * nv.z()};
             for (size_t a = 0; a < k; ++a) {
@@ -263,7 +264,7 @@ double local_energy(const Evaluator& eval, const FitPoints& pts, std::span<const
     e += (pts.p[i] - s.position).squaredNorm();
     if (lambda > 0) {
       const double a = pts.n[i].dot(s.du), b = pts.n[i].dot(s.dv);
-      e += lambda * (a * a + b * b);
+      e += lambda * pts.fair_weight(i) * (a * a + b * b);
     }
   }
   return e;

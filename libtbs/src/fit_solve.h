@@ -21,19 +21,22 @@ struct FitPoints {
   std::span<const int> triangle;    // located domain triangle per point, -1 = not used
   std::span<const int> order;       // point indices grouped by triangle (see group_by_triangle)
   std::span<const int> start;       // order[start[t] .. start[t+1]) are the points of t
+  std::span<const double> fair;     // per-point factor of the fairness term (empty: 1)
+  double fair_weight(int i) const { return fair.empty() ? 1.0 : fair[i]; }
 };
 
 /// Groups the points by triangle, in increasing index inside each group.
 void group_by_triangle(std::span<const int> triangle, int triangle_count, std::vector<int>& order,
                        std::vector<int>& start);
 
-/// Minimises sum |p - F(u)|^2 + lambda sum (n.F_u)^2 + (n.F_v)^2 + regulariser over the control
+/// Minimises sum |p - F(u)|^2 + lambda sum w_i ((n.F_u)^2 + (n.F_v)^2) + regulariser, with
+/// w_i = pts.fair_weight(i), over the control
 /// points of `spline` (knots fixed) and returns them. Deterministic for any thread count.
 /// \throw SolverError if the factorisation fails.
 std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& eval,
                                          const FitPoints& pts, double lambda, int threads);
 
-/// sum |p - F(u)|^2 + lambda sum (n.F_u)^2 + (n.F_v)^2 over the given points.
+/// sum |p - F(u)|^2 + lambda sum w_i ((n.F_u)^2 + (n.F_v)^2) over the given points.
 double local_energy(const Evaluator& eval, const FitPoints& pts, std::span<const int> points,
                     double lambda);
 

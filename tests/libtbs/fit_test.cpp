@@ -155,6 +155,12 @@ TEST(Fit, NoisySmoothSurfaceWithinToleranceAndNoise) {
   };
   const double sigma = 1.5e-4;
   const Scan s = grid_scan(f, 120, 120, sigma, 11, false);
+  if (std::getenv("TBS_DUMP")) {
+    FILE* fp = std::fopen(std::getenv("TBS_DUMP"), "w");
+    for (size_t i = 0; i < s.positions.size(); ++i)
+      std::fprintf(fp, "%.17g %.17g %.17g %.17g %.17g\n", s.positions[i].x(), s.positions[i].y(), s.positions[i].z(), s.uv[i].x(), s.uv[i].y());
+    std::fclose(fp);
+  }
   int last_cp = 0;
   double last_err = 1;
   for (double tol : {1e-2, 3e-3, 1e-3}) {
@@ -163,7 +169,7 @@ TEST(Fit, NoisySmoothSurfaceWithinToleranceAndNoise) {
     o.triangles = 8;  // start coarse, so that refinement decides the size
     const FitResult r = fit(s, o);
     SCOPED_TRACE(tol);
-    EXPECT_TRUE(r.report.converged) << r.report.stop_reason;
+    EXPECT_TRUE(r.report.converged) << r.report.stop_reason << r.report.to_json(false);
     EXPECT_LE(r.report.max_error, tol);
     EXPECT_GT(r.report.control_points, last_cp);
     EXPECT_LT(r.report.max_error, last_err);
@@ -226,6 +232,23 @@ TEST(Fit, CreaseIsKeptAsC0WithFewerControlPoints) {
       EXPECT_LT(std::acos(std::clamp(c.dot(d), -1.0, 1.0)), 1e-4) << u << " " << v;
     }
   }
+}
+
+// Bare points: no edge follows the crease; the band of bent Delaunay triangles locates it.
+TEST(Fit, CreaseInBarePointsIsFound) {
+  const Scan s = random_scan(fold, 12000, 21);
+  FitOptions o;
+  o.tolerance = 1e-3;
+  const FitResult with = fit(s, o);
+  o.features = false;
+  const FitResult without = fit(s, o);
+  EXPECT_TRUE(with.report.converged) << with.report.stop_reason;
+  EXPECT_GT(with.report.feature_edges, 0);
+  EXPECT_LT(with.report.control_points, without.report.control_points);
+  // The feature line lies on the crease (u = 0.5) to within a fraction of the point spacing.
+  const Domain& d = with.spline.domain();
+  for (const auto& e : d.feature_edges())
+    for (int v : e) EXPECT_NEAR(d.vertex(v).x(), 0.5, 0.003) << d.vertex(v).transpose();
 }
 
 TEST(Fit, TwoHolesStayHoles) {

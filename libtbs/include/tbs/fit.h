@@ -28,9 +28,11 @@ struct FitOptions {
   double tolerance_abs = 0;
   /// Domain triangles of the initial triangulation; 0 chooses points / 200, within [32, 4000].
   int triangles = 0;
-  /// Weight of the normal fairness term, dimensionless: the term is scaled by the square of the
-  /// parameter domain's size, so the same value acts alike for any parameter scale.
-  double fairness = 1e-5;
+  /// Weight of the normal fairness term, dimensionless: each point's term (n.F_u)^2 + (n.F_v)^2
+  /// is multiplied by the squared longest edge of its domain triangle, which makes it a squared
+  /// length like the distance term, for any parameter scale, and keeps it from growing stronger
+  /// as refinement shrinks triangles.
+  double fairness = 1e-3;
   /// Dihedral angle (degrees) above which a mesh edge is a sharp feature.
   double feature_angle = 40;
   bool features = true;
