@@ -16,7 +16,7 @@ mkdir -p "$work"
 
 cases=(
   "smooth 25000 3" "smooth 25000 4" "smooth 50000 3" "smooth 50000 4"
-  "creased 50000 3" "holes 50000 3"
+  "creased 50000 3" "holes 50000 3" "wavy 50000 3" "wavy 50000 4"
 )
 [ "$mode" = full ] && cases+=("smooth 200000 3" "smooth 1000000 3")
 

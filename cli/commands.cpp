@@ -11,7 +11,9 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <charconv>
+#include <cmath>
 #include <filesystem>
 #include <cstdio>
 #include <iostream>
@@ -253,7 +255,15 @@ int run_fit(const FitCommandOptions& o) {
   fo.max_iterations = o.max_iterations;
   fo.knot_sweeps = o.knot_sweeps;
   fo.threads = o.threads;
-  fo.progress = [&](const FitProgress& p) { say("tbs fit: [" + p.stage + "] " + p.message); };
+  fo.progress = [&](const FitProgress& p) {
+    std::string line = "tbs fit: [" + p.stage + "] ";
+    if (tty && p.stage == "refine") {
+      // A bar toward the tolerance (log scale of the maximum error).
+      const int width = 20, done = static_cast<int>(std::lround(std::clamp(p.fraction, 0.0, 1.0) * width));
+      line += "[" + std::string(done, '#') + std::string(width - done, ' ') + "] ";
+    }
+    say(line + p.message);
+  };
   const FitResult r = fit(scan, fo);
   if (tty && !o.quiet) std::fprintf(stderr, "\n");
 

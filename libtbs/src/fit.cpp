@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -286,9 +287,9 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
 
     // Free knots: OptimizeKnot on the vertices of triangles with large errors, then re-solve.
     if (opt.knot_sweeps > 0 && e.max > rep.tolerance_abs) {
-      const auto ts = Clock::now();
       const Domain& d = spline.domain();
       for (int sweep = 0; sweep < opt.knot_sweeps; ++sweep) {
+        const auto ts = Clock::now();
         std::vector<double> tri_err(d.triangle_count(), 0.0);
         for (size_t i = 0; i < N; ++i)
           if (located[i] >= 0) tri_err[located[i]] = std::max(tri_err[located[i]], err[i]);
@@ -310,16 +311,24 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
         if (st.moved == 0) break;
         solve();
         e = measure();
+        // The energy stalls: another pass would gain less than 1 %.
+        if (st.energy_before - st.energy_after < 0.01 * st.energy_before) break;
       }
     }
 
     rep.rounds.push_back({spline.domain().triangle_count(), spline.control_point_count(),
                           e.max / rep.scale, e.rms / rep.scale});
-    progress("refine", "round " + std::to_string(iter + 1) + ": " +
-                           std::to_string(spline.domain().triangle_count()) + " triangles, " +
-                           std::to_string(spline.control_point_count()) + " control points, max error " +
-                           std::to_string(e.max / rep.scale),
-             0);
+    // Progress toward the tolerance, on a log scale from the first round's error.
+    const double e0 = rep.rounds.front().max_error * rep.scale;
+    const double frac = e.max <= rep.tolerance_abs ? 1.0
+                        : e0 <= rep.tolerance_abs || e.max >= e0
+                            ? 0.0
+                            : std::log(e0 / e.max) / std::log(e0 / rep.tolerance_abs);
+    char msg[160];
+    std::snprintf(msg, sizeof msg, "round %d: %d triangles, %d control points, max error %.3g (target %.3g)",
+                  iter + 1, spline.domain().triangle_count(), spline.control_point_count(),
+                  e.max / rep.scale, rep.tolerance);
+    progress("refine", msg, frac);
     rep.iterations = iter + 1;
     auto finish = [&](bool converged, const std::string& why) {
       rep.converged = converged;

@@ -51,6 +51,96 @@ using WCdt = CGAL::Constrained_Delaunay_triangulation_2<K, CGAL::Triangulation_d
 CPoint cp(const Point2& p) { return {p.x(), p.y()}; }
 Point2 ep(const CPoint& p) { return {p.x(), p.y()}; }
 
+// Mesh size following the parameter density (paper section 4.2: "areas with dense parameter
+// points should have more triangles"): the size bound at a point is h * sqrt(mean density /
+// local density), clamped to [h / 2, 2 h]; the density is counted on a grid and smoothed.
+class SizeField {
+ public:
+  SizeField(std::span<const Point2> uv, const std::vector<char>& excluded, double h, double area) : h_(h) {
+    for (size_t i = 0; i < uv.size(); ++i)
+      if (!excluded[i]) box_.extend(uv[i]);
+    size_t used = 0;
+    for (char e : excluded) used += !e;
+    g_ = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(used)) / 4), 4, 256);
+    const double w = std::max(box_.max.x() - box_.min.x(), box_.max.y() - box_.min.y());
+    cell_ = w / g_ * (1 + 1e-9);
+    std::vector<double> count(static_cast<size_t>(g_) * g_, 0.0);
+    for (size_t i = 0; i < uv.size(); ++i)
+      if (!excluded[i]) count[index(uv[i])] += 1;
+    // 3 x 3 box blur, so that cells cut by the outline or a hole do not read as sparse.
+    density_.assign(count.size(), 0.0);
+    for (int y = 0; y < g_; ++y)
+      for (int x = 0; x < g_; ++x) {
+        double sum = 0;
+        int cells = 0;
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int xx = x + dx, yy = y + dy;
+            if (xx < 0 || yy < 0 || xx >= g_ || yy >= g_ || count[yy * g_ + xx] == 0) continue;
+            sum += count[yy * g_ + xx];
+            ++cells;
+          }
+        density_[y * g_ + x] = cells > 0 ? sum / cells / (cell_ * cell_) : 0;
+      }
+    mean_ = static_cast<double>(used) / area;
+  }
+  double operator()(const Point2& p) const {
+    const double d = density_[index(p)];
+    if (!(d > 0)) return 2 * h_;
+    return h_ * std::clamp(std::sqrt(mean_ / d), 0.5, 2.0);
+  }
+
+ private:
+  size_t index(const Point2& p) const {
+    const int x = std::clamp(static_cast<int>((p.x() - box_.min.x()) / cell_), 0, g_ - 1);
+    const int y = std::clamp(static_cast<int>((p.y() - box_.min.y()) / cell_), 0, g_ - 1);
+    return static_cast<size_t>(y) * g_ + x;
+  }
+  double h_;
+  Box2 box_;
+  int g_ = 1;
+  double cell_ = 1, mean_ = 1;
+  std::vector<double> density_;
+};
+
+
+// CGAL's size criteria with the size bound taken from a SizeField at each triangle's centroid.
+class DensityCriteria : public MCriteria {
+ public:
+  DensityCriteria(const SizeField* field) : MCriteria(0.125, 1.0), field_(field) {}
+  class Is_bad : public MCriteria::Is_bad {
+   public:
+    Is_bad(const SizeField* field, double aspect, const K& traits)
+        : MCriteria::Is_bad(aspect, 1.0, traits), field_(field) {}
+    using MCriteria::Is_bad::operator();
+    CGAL::Mesh_2::Face_badness operator()(const MCdt::Face_handle& fh, Quality& q) const {
+      const CPoint& pa = fh->vertex(0)->point();
+      const CPoint& pb = fh->vertex(1)->point();
+      const CPoint& pc = fh->vertex(2)->point();
+      double l[3] = {CGAL::squared_distance(pb, pc), CGAL::squared_distance(pc, pa),
+                     CGAL::squared_distance(pa, pb)};
+      std::sort(l, l + 3);
+      const Point2 c((pa.x() + pb.x() + pc.x()) / 3, (pa.y() + pb.y() + pc.y()) / 3);
+      const double bound = (*field_)(c);
+      q.second = l[2] / (bound * bound);
+      if (q.size() > 1) {
+        q.first = 1;
+        return CGAL::Mesh_2::IMPERATIVELY_BAD;
+      }
+      const double area = 2 * CGAL::area(pa, pb, pc);
+      q.first = area * area / (l[2] * l[1]);
+      return q.sine() < this->B ? CGAL::Mesh_2::BAD : CGAL::Mesh_2::NOT_BAD;
+    }
+
+   private:
+    const SizeField* field_;
+  };
+  Is_bad is_bad_object() const { return Is_bad(field_, this->bound(), this->traits); }
+
+ private:
+  const SizeField* field_;
+};
+
 uint64_t edge_key(int a, int b) {
   if (a > b) std::swap(a, b);
   return (static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b);
@@ -194,22 +284,34 @@ Region region_from_points(std::span<const Point2> uv) {
   if (dt.dimension() < 2)
     throw InvalidInput("the parameters (u, v) of all points are collinear or identical; the fit "
                        "needs parameters that span an area");
-  // Spacing: median over vertices of the shortest incident edge.
-  std::vector<double> nn;
-  nn.reserve(dt.number_of_vertices());
+  // Local spacing: per vertex the shortest incident edge, then the median of that over the
+  // vertex and its neighbours (densities vary: parameterizations stretch).
+  std::vector<double> nn(uv.size(), 0.0), local(uv.size(), 0.0);
   for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) {
     double best = std::numeric_limits<double>::infinity();
     auto c = dt.incident_vertices(v), done = c;
     do {
       if (!dt.is_infinite(c)) best = std::min(best, std::sqrt(CGAL::squared_distance(v->point(), c->point())));
     } while (++c != done);
-    nn.push_back(best);
+    nn[v->info()] = best;
   }
-  std::nth_element(nn.begin(), nn.begin() + nn.size() / 2, nn.end());
-  const double spacing = nn[nn.size() / 2];
-  // Random uniform samples leave empty circles a few times the spacing; only larger gaps are
-  // outline or holes.
-  const double alpha = 6.0 * spacing;
+  std::vector<double> ring, all;
+  for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) all.push_back(nn[v->info()]);
+  std::nth_element(all.begin(), all.begin() + all.size() / 2, all.end());
+  const double global = all[all.size() / 2];
+  for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) {
+    ring.assign(1, nn[v->info()]);
+    auto c = dt.incident_vertices(v), done = c;
+    do {
+      if (!dt.is_infinite(c)) ring.push_back(nn[c->info()]);
+    } while (++c != done);
+    std::nth_element(ring.begin(), ring.begin() + ring.size() / 2, ring.end());
+    // Never below the global median: a few close pairs must not carve holes.
+    local[v->info()] = std::max(global, ring[ring.size() / 2]);
+  }
+  // Random samples leave empty circles a few times the local spacing; only larger gaps are
+  // outline or holes: a triangle stays if its circumradius is at most 6 times the largest
+  // local spacing at its corners (an alpha shape with a local alpha).
   Region r;
   std::vector<Dt::Face_handle> faces;
   for (auto f = dt.finite_faces_begin(); f != dt.finite_faces_end(); ++f) faces.push_back(f);
@@ -223,7 +325,38 @@ Region region_from_points(std::span<const Point2> uv) {
                  lc = std::sqrt(CGAL::squared_distance(a, b));
     const double area2 = std::fabs(CGAL::area(a, b, c)) * 2;
     const double circumradius = area2 > 0 ? la * lb * lc / (2 * area2) : std::numeric_limits<double>::infinity();
-    keep[i] = circumradius <= alpha;
+    const double alpha = 6.0 * std::max({local[faces[i]->vertex(0)->info()], local[faces[i]->vertex(1)->info()],
+                                         local[faces[i]->vertex(2)->info()]});
+    // Flat slivers have a large circumradius but short edges: they are not gaps.
+    keep[i] = circumradius <= alpha || std::max({la, lb, lc}) <= 0.5 * alpha;
+  }
+  // Interior gaps smaller than a disc of about 4 spacings are sampling noise, not holes.
+  {
+    std::vector<int> seen(faces.size(), 0);
+    for (size_t i = 0; i < faces.size(); ++i) {
+      if (keep[i] || seen[i]) continue;
+      std::vector<int> gap{static_cast<int>(i)}, stack{static_cast<int>(i)};
+      seen[i] = 1;
+      bool outer = false;
+      double area = 0;
+      while (!stack.empty()) {
+        const int f = stack.back();
+        stack.pop_back();
+        area += std::fabs(CGAL::area(faces[f]->vertex(0)->point(), faces[f]->vertex(1)->point(),
+                                     faces[f]->vertex(2)->point()));
+        for (int k = 0; k < 3; ++k) {
+          auto g = faces[f]->neighbor(k);
+          if (dt.is_infinite(g)) {
+            outer = true;
+            continue;
+          }
+          const int gi = g->info();
+          if (!keep[gi] && !seen[gi]) seen[gi] = 1, gap.push_back(gi), stack.push_back(gi);
+        }
+      }
+      if (!outer && area < 50 * global * global)
+        for (int f : gap) keep[f] = 1;
+    }
   }
   // Pinch vertices (two kept fans touching at a point) are filled back in until none is left.
   for (int round = 0; round < 20; ++round) {
@@ -334,10 +467,20 @@ std::vector<std::vector<Point2>> band_creases(const Region& r, std::span<const P
   }
   const double cos_band = std::cos(angle_deg / 3 * std::numbers::pi / 180);
   const double cos_crease = std::cos(angle_deg * std::numbers::pi / 180);
+  // Triangles at the region's outline are stretched and tilted (alpha shape): not crease clues.
+  std::unordered_set<int> rim;
+  for (const auto& [key, ef] : edge_faces)
+    if (ef[1] < 0) rim.insert(static_cast<int>(key >> 32)), rim.insert(static_cast<int>(key & 0xffffffffu));
+  auto at_rim = [&](int f) {
+    for (int v : r.tris[f])
+      if (rim.count(v)) return true;
+    return false;
+  };
   std::vector<char> band(F, 0);
   std::vector<std::pair<uint64_t, std::array<int, 2>>> band_edges;
   for (const auto& [key, ef] : edge_faces) {
     if (ef[1] < 0 || taken.count(key) || fn[ef[0]].isZero() || fn[ef[1]].isZero()) continue;
+    if (at_rim(ef[0]) || at_rim(ef[1])) continue;
     if (fn[ef[0]].dot(fn[ef[1]]) >= cos_band) continue;
     band[ef[0]] = band[ef[1]] = 1;
     band_edges.push_back({key, ef});
@@ -390,14 +533,20 @@ std::vector<std::vector<Point2>> band_creases(const Region& r, std::span<const P
     if (length < 2 * h || 2 * wmax > 0.25 * length) continue;
     // The two sides: non-band triangles next to the band.
     Vector3 nl = Vector3::Zero(), nr = Vector3::Zero();
+    size_t cl = 0, cr = 0;
     for (int f : c)
       for (int k = 0; k < 3; ++k) {
         const auto& ef = edge_faces[edge_key(r.tris[f][k], r.tris[f][(k + 1) % 3])];
         const int g = ef[0] == f ? ef[1] : ef[0];
         if (g < 0 || band[g]) continue;
-        ((centroid[g] - mean).dot(side) < 0 ? nl : nr) += fn[g];
+        if ((centroid[g] - mean).dot(side) < 0)
+          nl += fn[g], ++cl;
+        else
+          nr += fn[g], ++cr;
       }
-    if (nl.isZero() || nr.isZero() || nl.normalized().dot(nr.normalized()) >= cos_crease) continue;
+    // Both sides must be well represented, and bent against each other by the feature angle.
+    const size_t need = std::max<size_t>(3, c.size() / 8);
+    if (cl < need || cr < need || nl.normalized().dot(nr.normalized()) >= cos_crease) continue;
     // Centre line: centroids averaged in bins of h / 2 along the axis.
     const int bins = std::max(3, static_cast<int>(std::ceil(length / (0.5 * h))));
     std::vector<Point2> sum(bins, Point2::Zero());
@@ -577,7 +726,9 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
 
   auto loops = boundary_loops(region, n);
   std::vector<std::vector<int>> chains;
-  if (in.features) chains = feature_chains(region, in.positions, in.feature_angle_deg);
+  // Sharp edges only mean something on a given mesh; the Delaunay triangles of bare points
+  // straddle creases (found as bands below) and are stretched at the outline.
+  if (in.features && !in.faces.empty()) chains = feature_chains(region, in.positions, in.feature_angle_deg);
   // Short chains are noise, not features.
   std::erase_if(chains, [&](const std::vector<int>& c) {
     double len = 0;
@@ -819,7 +970,8 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
         if (level[f] > 0 && level[f] % 2 == 0)
           seeds.push_back(CGAL::centroid(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point()));
     }
-    CGAL::refine_Delaunay_mesh_2(mcdt, seeds.begin(), seeds.end(), MCriteria(0.125, 1.4 * h));
+    const SizeField field(in.uv, m.excluded, 1.4 * h, area);
+    CGAL::refine_Delaunay_mesh_2(mcdt, seeds.begin(), seeds.end(), DensityCriteria(&field));
 
     // The working triangulation from snapped vertices.
     m.cdt.clear();

@@ -251,6 +251,33 @@ TEST(Fit, CreaseInBarePointsIsFound) {
     for (int v : e) EXPECT_NEAR(d.vertex(v).x(), 0.5, 0.003) << d.vertex(v).transpose();
 }
 
+// Paper section 4.2: dense parameters get more (smaller) domain triangles.
+TEST(Fit, InitialDomainFollowsParameterDensity) {
+  auto f = [](double u, double v) { return Point3(u, v, 0.1 * u * v); };
+  Scan s = random_scan(f, 4000, 31);
+  std::mt19937_64 rng(32);
+  std::uniform_real_distribution<double> half(0.0, 0.5), uni(0.0, 1.0);
+  for (int i = 0; i < 12000; ++i) {  // four times denser where u < 0.5
+    const Point2 uv(half(rng), uni(rng));
+    s.uv.push_back(uv);
+    s.positions.push_back(f(uv.x(), uv.y()));
+  }
+  FitOptions o;
+  o.max_iterations = 0;
+  o.knot_sweeps = 0;
+  o.triangles = 200;
+  const FitResult r = fit(s, o);
+  const Domain& d = r.spline.domain();
+  int dense = 0, sparse = 0;
+  for (int t = 0; t < d.triangle_count(); ++t) {
+    const auto& tri = d.triangle(t);
+    const double cu = (d.vertex(tri[0]).x() + d.vertex(tri[1]).x() + d.vertex(tri[2]).x()) / 3;
+    (cu < 0.5 ? dense : sparse) += 1;
+  }
+  EXPECT_GT(dense, 2 * sparse) << dense << " " << sparse;
+  EXPECT_NEAR(d.triangle_count(), 200, 100);
+}
+
 TEST(Fit, TwoHolesStayHoles) {
   auto f = [](double u, double v) { return Point3(u, v, 0.1 * std::sin(2 * u + v)); };
   const std::vector<std::pair<Point2, double>> holes{{{0.3, 0.3}, 0.12}, {{0.7, 0.65}, 0.15}};
