@@ -6,7 +6,7 @@
 KIND: smooth  - z = 0.1 sin(5u) cos(4v) + 0.05 uv over [0,1]^2 (unit-size model)
       creased - the same plus a 60 degree fold along u = 0.5 (z -= tan(30 deg) |u - 0.5|)
       holes   - smooth, with two round holes (radius 0.12 and 0.15)
-      wavy    - z = 0.05 sin(12u) sin(10v): needs refinement and knot moves at 1e-3
+      wavy    - z = 0.05 sin(30u) sin(24v): needs refinement and knot moves at 1e-3
 Parameters are uniform random in the domain; positions get Gaussian noise of 1e-4 along z.
 """
 import math
@@ -29,7 +29,7 @@ def main():
         if any(math.hypot(u - c[0], v - c[1]) < r for c, r in holes):
             continue
         if kind == "wavy":
-            z = 0.05 * math.sin(12 * u) * math.sin(10 * v)
+            z = 0.05 * math.sin(30 * u) * math.sin(24 * v)
         else:
             z = 0.1 * math.sin(5 * u) * math.cos(4 * v) + 0.05 * u * v - slope * abs(u - 0.5)
         z += rng.gauss(0.0, 1e-4)

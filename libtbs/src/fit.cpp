@@ -308,6 +308,13 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
                                                [&](int v, const Point2& p) { fdom.move_vertex(fdom.ids()[v], p); },
                                                opt.threads);
         stage["knots"] += seconds_since(ts);
+        {
+          char msg[160];
+          std::snprintf(msg, sizeof msg, "round %d: knots of %d vertices tried, %d moved, local energy %.2f %% lower",
+                        iter + 1, st.vertices, st.moved,
+                        st.energy_before > 0 ? 100 * (st.energy_before - st.energy_after) / st.energy_before : 0.0);
+          progress("knots", msg, 1);
+        }
         if (st.moved == 0) break;
         solve();
         e = measure();

@@ -803,14 +803,12 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
         const double d1 = off[prev], d2 = off[e];
         Point2 q = p;
         if (d1 > 0 || d2 > 0) {
-          // Solve n1 . x = d1, n2 . x = d2.
-          Eigen::Matrix2d A;
-          A << normal[prev].transpose(), normal[e].transpose();
-          const double det = A.determinant();
-          Vector2 x = std::fabs(det) > 1e-3 ? Vector2(A.inverse() * Vector2(d1, d2))
-                                            : Vector2((normal[prev] + normal[e]).normalized() * std::max(d1, d2));
-          const double cap = 4 * std::max(d1, d2);
-          if (x.norm() > cap) x *= cap / x.norm();
+          // Along the bisector b of the two outward normals, far enough that both edges move
+          // out by at least their offset: n_i . x = max(d1, d2) (n_i . b = cos(half angle)).
+          const Vector2 sum = normal[prev] + normal[e];
+          const Vector2 b = sum.norm() > 1e-12 ? Vector2(sum.normalized()) : normal[e];
+          const double c = std::max(normal[e].dot(b), 0.25);
+          const Vector2 x = b * (std::max(d1, d2) / c);
           q = p + x;
         }
         poly.push_back(q);
@@ -1032,7 +1030,9 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
           const K::Segment_2 seg(va->point(), vb->point());
           if (CGAL::squared_distance(seg, cp(in.uv[i])) < 16 * m.grid * m.grid) near = true;
         }
-        if (!near) ++outside;
+        if (!near) {
+          ++outside;
+        }
       }
     }
     if (outside > 0 && tau > 0) {

@@ -60,6 +60,15 @@ VertexResult optimize_vertex(Spline& spline, Evaluator& eval, int s, std::vector
   for (int t : ring2) local.insert(local.end(), tri_points[t].begin(), tri_points[t].end());
   if (local.empty()) return res;
   std::sort(local.begin(), local.end());
+  // The local energy is judged on at most kMaxLocalPoints of them (every k-th, in index order):
+  // enough to rank knot moves, and it bounds the cost per vertex for dense scans.
+  constexpr size_t kMaxLocalPoints = 512;
+  if (local.size() > kMaxLocalPoints) {
+    const size_t stride = (local.size() + kMaxLocalPoints - 1) / kMaxLocalPoints;
+    size_t w = 0;
+    for (size_t q = 0; q < local.size(); q += stride) local[w++] = local[q];
+    local.resize(w);
+  }
   res.tried = true;
   double energy = local_energy(eval, pts, local, lambda);
   res.before = energy;

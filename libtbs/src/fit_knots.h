@@ -21,7 +21,8 @@ struct KnotSweepStats {
 /// 4 edges apart get different colours; each colour class runs in parallel (`threads`, 0 = all
 /// cores) on per-worker copies of the spline, so the result does not depend on the thread
 /// count: a vertex's search sees only the state at the start of its class. Moves only
-/// accepted when the local energy (points located in the 2-ring of s) falls and every knot
+/// accepted when the local energy (points located in the 2-ring of s, at most 512 of them taken
+/// evenly by index) falls and every knot
 /// condition still holds: primary knots of interior vertices stay inside their 1-ring (no
 /// triangle flips or collapses), sub-knots within Traas's radius r of the primary knot,
 /// boundary sub-knots outside the domain; boundary primary knots and the knots of feature

@@ -278,6 +278,55 @@ TEST(Fit, InitialDomainFollowsParameterDensity) {
   EXPECT_NEAR(d.triangle_count(), 200, 100);
 }
 
+// Half of the domain holds no data (a mesh whose right half is a few large triangles): the
+// regulariser must keep the system definite and the surface there tame.
+TEST(Fit, EmptyRegionsStayDefinite) {
+  auto f = [](double u, double v) { return Point3(u, v, 0.2 * std::sin(3 * u) * v); };
+  Scan s;
+  const int n = 41;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i <= (n - 1) / 2; ++i) {
+      const double u = 0.5 * i / ((n - 1) / 2), v = static_cast<double>(j) / (n - 1);
+      s.uv.emplace_back(u, v);
+      s.positions.push_back(f(u, v));
+    }
+  const int w = (n - 1) / 2 + 1;  // points per row
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < w; ++i) {
+      const int a = j * w + i, b = a + 1, c = a + w + 1, d = a + w;
+      s.triangles.push_back({a, b, c});
+      s.triangles.push_back({a, c, d});
+    }
+  const int lo = static_cast<int>(s.uv.size());  // (1, 0) and (1, 1)
+  for (double v : {0.0, 1.0}) {
+    s.uv.emplace_back(1.0, v);
+    s.positions.push_back(f(1.0, v));
+  }
+  for (int j = 0; j + 1 < n; ++j) {
+    const int a = j * w + (w - 1), b = (j + 1) * w + (w - 1);
+    s.triangles.push_back({a, j < n / 2 ? lo : lo + 1, b});
+  }
+  s.triangles.push_back({lo, lo + 1, (n / 2) * w + (w - 1)});
+  FitOptions o;
+  o.tolerance = 1e-3;
+  const FitResult r = fit(s, o);
+  EXPECT_TRUE(r.report.converged) << r.report.stop_reason;
+  // No blow-up: the membrane makes empty-region control points averages of their neighbours,
+  // so the surface stays within (a margin around) the data's bounding box.
+  Box3 box;
+  for (const auto& p : s.positions) box.extend(p);
+  const Vector3 margin = 0.1 * (box.max - box.min).maxCoeff() * Vector3::Ones();
+  Evaluator ev(r.spline);
+  for (double u = 0.55; u < 1; u += 0.1)
+    for (double v = 0.05; v < 1; v += 0.1) {
+      const Point3 p = ev.value({u, v});
+      ASSERT_TRUE(p.allFinite());
+      EXPECT_TRUE((p.array() >= (box.min - margin).array()).all() &&
+                  (p.array() <= (box.max + margin).array()).all())
+          << u << " " << v << ": " << p.transpose();
+    }
+}
+
 TEST(Fit, TwoHolesStayHoles) {
   auto f = [](double u, double v) { return Point3(u, v, 0.1 * std::sin(2 * u + v)); };
   const std::vector<std::pair<Point2, double>> holes{{{0.3, 0.3}, 0.12}, {{0.7, 0.65}, 0.15}};
