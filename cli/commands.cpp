@@ -243,18 +243,8 @@ int run_fit(const FitCommandOptions& o) {
 
   say("tbs fit: reading " + o.input);
   const Scan scan = read_scan(o.input);
-  FitOptions fo;
-  fo.degree = o.degree;
-  fo.tolerance = o.tolerance;
-  fo.tolerance_abs = o.tolerance_abs;
-  fo.triangles = o.triangles;
-  fo.fairness = o.fairness;
-  fo.feature_angle = o.feature_angle;
+  FitOptions fo = o.fit;
   fo.features = !o.no_features;
-  fo.max_control_points = o.max_control_points;
-  fo.max_iterations = o.max_iterations;
-  fo.knot_sweeps = o.knot_sweeps;
-  fo.threads = o.threads;
   fo.progress = [&](const FitProgress& p) {
     std::string line = "tbs fit: [" + p.stage + "] ";
     if (tty && p.stage == "refine") {

@@ -1,6 +1,8 @@
 #pragma once
 // The subcommands of the `tbs` command. Each returns the process exit code.
 
+#include <tbs/fit.h>
+
 #include <string>
 
 namespace tbs::cli {
@@ -33,18 +35,9 @@ struct FitCommandOptions {
   std::string output;
   std::string report;  // empty: none
   std::string units = "unitless";
-  int degree = 3;
-  double tolerance = 1e-3;
-  double tolerance_abs = 0;
-  int triangles = 0;
-  double fairness = 1e-3;
-  double feature_angle = 40;
   bool no_features = false;
-  int max_control_points = 0;
-  int max_iterations = 25;
-  int knot_sweeps = 1;
-  int threads = 0;
   bool quiet = false;
+  FitOptions fit;  // the library's defaults are the command's defaults
 };
 int run_fit(const FitCommandOptions& o);
 

@@ -46,39 +46,40 @@ int main(int argc, char** argv) {
              "(x y z u v [nx ny nz]). Prints a summary table on stdout, progress on stderr.");
   fit_cmd->add_option("input", fit.input, "The scan")->required();
   fit_cmd->add_option("-o,--output", fit.output, "The .tbs file to write")->required();
-  fit_cmd->add_option("--degree", fit.degree, "Polynomial degree n (C^(n-1) where smooth)")
+  fit_cmd->add_option("--degree", fit.fit.degree, "Polynomial degree n (C^(n-1) where smooth)")
       ->check(CLI::Range(1, 8))->capture_default_str();
-  fit_cmd->add_option("--tolerance", fit.tolerance,
+  fit_cmd->add_option("--tolerance", fit.fit.tolerance,
                       "Maximum error, relative to the largest side of the points' bounding box "
                       "(1e-3 = 0.1 %)")
       ->check(CLI::PositiveNumber)->capture_default_str();
-  fit_cmd->add_option("--tolerance-abs", fit.tolerance_abs,
+  fit_cmd->add_option("--tolerance-abs", fit.fit.tolerance_abs,
                       "Maximum error in model units (overrides --tolerance)")
       ->check(CLI::PositiveNumber);
-  fit_cmd->add_option("--triangles", fit.triangles,
+  fit_cmd->add_option("--triangles", fit.fit.triangles,
                       "Triangles of the initial domain (default: points / 200, 32 to 4000)")
       ->check(CLI::Range(1, 10'000'000));
-  fit_cmd->add_option("--fairness", fit.fairness,
+  fit_cmd->add_option("--fairness", fit.fit.fairness,
                       "Weight of the normal fairness term (dimensionless; 0 turns it off)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
-  auto* fa = fit_cmd->add_option("--feature-angle", fit.feature_angle,
+  auto* fa = fit_cmd->add_option("--feature-angle", fit.fit.feature_angle,
                                  "Dihedral angle in degrees above which an edge is a sharp feature "
                                  "(kept C^0)")
-                 ->check(CLI::Range(0.0, 180.0))->capture_default_str();
+                 ->check(CLI::Range(1.0, 179.0))->capture_default_str();
   fit_cmd->add_flag("--no-features", fit.no_features, "Do not detect sharp features")->excludes(fa);
-  fit_cmd->add_option("--max-control-points", fit.max_control_points,
+  fit_cmd->add_option("--max-control-points", fit.fit.max_control_points,
                       "Stop refining before exceeding this many control points (default: the "
                       "number of points)")
       ->check(CLI::PositiveNumber);
-  fit_cmd->add_option("--max-iterations", fit.max_iterations, "Most refinement rounds")
+  fit_cmd->add_option("--max-iterations", fit.fit.max_iterations, "Most refinement rounds")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
-  fit_cmd->add_option("--knot-sweeps", fit.knot_sweeps,
-                      "Knot optimisation passes per round (0 = fixed knots)")
+  fit_cmd->add_option("--knot-sweeps", fit.fit.knot_sweeps,
+                      "Most knot optimisation passes per round; they stop early when one gains "
+                      "less than 1 % (0 = fixed knots)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   fit_cmd->add_option("--units", fit.units, "Length unit of the scan: mm, cm, m, um, in, ft, unitless")
       ->check(CLI::IsMember({"mm", "cm", "m", "um", "in", "ft", "unitless"}))->capture_default_str();
   fit_cmd->add_option("--report", fit.report, "Also write the fit report (JSON) here");
-  fit_cmd->add_option("--threads,-t", fit.threads, "Worker threads (0 = all cores); the result "
+  fit_cmd->add_option("--threads,-t", fit.fit.threads, "Worker threads (0 = all cores); the result "
                                                    "does not depend on it")
       ->check(CLI::NonNegativeNumber);
   fit_cmd->add_flag("--quiet,-q", fit.quiet, "No progress messages on stderr");

@@ -153,6 +153,20 @@ struct Region {
 
 double signed_area2(const Point2& a, const Point2& b, const Point2& c) { return det3(a, b, c); }
 
+// Edge (as edge_key) -> its one or two triangles (second -1 on the outline).
+std::unordered_map<uint64_t, std::array<int, 2>> edge_face_map(const Region& r) {
+  std::unordered_map<uint64_t, std::array<int, 2>> edge_faces;
+  edge_faces.reserve(r.tris.size() * 2);
+  for (size_t f = 0; f < r.tris.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      auto [it, fresh] = edge_faces.try_emplace(edge_key(r.tris[f][k], r.tris[f][(k + 1) % 3]),
+                                                std::array<int, 2>{static_cast<int>(f), -1});
+      if (!fresh) it->second[1] = static_cast<int>(f);
+    }
+  return edge_faces;
+}
+
+
 Region region_from_faces(std::span<const Point2> uv, std::span<const std::array<int, 3>> faces) {
   size_t pos = 0, neg = 0, zero = 0, first_neg = 0, first_pos = 0;
   std::vector<int> sign(faces.size());
@@ -236,13 +250,7 @@ std::vector<std::vector<int>> boundary_loops(const Region& r, size_t n_points) {
 
 // Keeps the largest edge-connected component of a region; returns the dropped triangle count.
 size_t keep_largest_component(Region& r, std::span<const Point2> uv) {
-  std::unordered_map<uint64_t, std::array<int, 2>> edge_faces;
-  for (size_t f = 0; f < r.tris.size(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      auto [it, fresh] = edge_faces.try_emplace(edge_key(r.tris[f][k], r.tris[f][(k + 1) % 3]),
-                                                std::array<int, 2>{static_cast<int>(f), -1});
-      if (!fresh) it->second[1] = static_cast<int>(f);
-    }
+  auto edge_faces = edge_face_map(r);
   std::vector<int> comp(r.tris.size(), -1);
   std::vector<double> area;
   for (size_t s = 0; s < r.tris.size(); ++s) {
@@ -392,13 +400,7 @@ Region region_from_points(std::span<const Point2> uv) {
 // into polylines of point indices.
 std::vector<std::vector<int>> feature_chains(const Region& r, std::span<const Point3> pos,
                                              double angle_deg) {
-  std::unordered_map<uint64_t, std::array<int, 2>> edge_faces;
-  for (size_t f = 0; f < r.tris.size(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      auto [it, fresh] = edge_faces.try_emplace(edge_key(r.tris[f][k], r.tris[f][(k + 1) % 3]),
-                                                std::array<int, 2>{static_cast<int>(f), -1});
-      if (!fresh) it->second[1] = static_cast<int>(f);
-    }
+  auto edge_faces = edge_face_map(r);
   std::vector<Vector3> fn(r.tris.size());
   for (size_t f = 0; f < r.tris.size(); ++f) {
     const auto& t = r.tris[f];
@@ -449,13 +451,7 @@ std::vector<std::vector<int>> feature_chains(const Region& r, std::span<const Po
 std::vector<std::vector<Point2>> band_creases(const Region& r, std::span<const Point2> uv,
                                               std::span<const Point3> pos, double angle_deg,
                                               double h, const std::unordered_set<uint64_t>& taken) {
-  std::unordered_map<uint64_t, std::array<int, 2>> edge_faces;
-  for (size_t f = 0; f < r.tris.size(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      auto [it, fresh] = edge_faces.try_emplace(edge_key(r.tris[f][k], r.tris[f][(k + 1) % 3]),
-                                                std::array<int, 2>{static_cast<int>(f), -1});
-      if (!fresh) it->second[1] = static_cast<int>(f);
-    }
+  auto edge_faces = edge_face_map(r);
   const size_t F = r.tris.size();
   std::vector<Vector3> fn(F);
   std::vector<Point2> centroid(F);

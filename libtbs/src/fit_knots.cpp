@@ -15,17 +15,6 @@
 namespace tbs::detail {
 namespace {
 
-double traas_radius(const Domain& d, int v) {
-  double r = std::numeric_limits<double>::infinity();
-  for (int t : d.vertex_triangles(v)) {
-    const auto& tri = d.triangle(t);
-    const int k = tri[0] == v ? 0 : (tri[1] == v ? 1 : 2);
-    const Point2& a = d.vertex(tri[(k + 1) % 3]);
-    const Point2& b = d.vertex(tri[(k + 2) % 3]);
-    r = std::min(r, 0.5 * std::fabs(det3(d.vertex(v), a, b)) / (b - a).norm());
-  }
-  return r;
-}
 
 double tri_area(const Domain& d, int t) {
   const auto& tri = d.triangle(t);

@@ -161,18 +161,6 @@ std::pair<double, double> boundary_wedge(const Domain& d, int v) {
   return {std::atan2(bis.y(), bis.x()), half};
 }
 
-double traas_radius(const Domain& d, int v) {
-  double r = std::numeric_limits<double>::infinity();
-  for (int t : d.vertex_triangles(v)) {
-    const auto& tri = d.triangle(t);
-    const int k = tri[0] == v ? 0 : (tri[1] == v ? 1 : 2);
-    const Point2& a = d.vertex(tri[(k + 1) % 3]);
-    const Point2& b = d.vertex(tri[(k + 2) % 3]);
-    const double h = std::fabs(det3(d.vertex(v), a, b)) / (b - a).norm();
-    r = std::min(r, 0.5 * h);
-  }
-  return r;
-}
 
 bool strictly_outside_wedge_ok(const Domain& d, int v, const Point2& q) {
   return orientation(d.vertex(d.boundary_prev(v)), d.vertex(v), q) < 0 &&
@@ -194,6 +182,19 @@ Point2 on_line(const Point2& p, const Point2& q, double s) {
 }
 
 }  // namespace
+
+double traas_radius(const Domain& d, int v) {
+  double r = std::numeric_limits<double>::infinity();
+  for (int t : d.vertex_triangles(v)) {
+    const auto& tri = d.triangle(t);
+    const int k = tri[0] == v ? 0 : (tri[1] == v ? 1 : 2);
+    const Point2& a = d.vertex(tri[(k + 1) % 3]);
+    const Point2& b = d.vertex(tri[(k + 2) % 3]);
+    const double h = std::fabs(det3(d.vertex(v), a, b)) / (b - a).norm();
+    r = std::min(r, 0.5 * h);
+  }
+  return r;
+}
 
 std::string KnotCheck::summary(size_t max_lines) const {
   std::string s;

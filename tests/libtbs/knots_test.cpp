@@ -164,7 +164,9 @@ TEST(FeatureServers, EveryFeatureVertexServesALineAndEveryEdgeIsServed) {
     // Interior feature vertices all put their sub-knots on the line (the paper's constraint);
     // a boundary end only when its ray leaves the domain.
     for (int v : e)
-      if (!d.is_boundary_vertex(v)) EXPECT_GE(server[v], 0) << v;
+      if (!d.is_boundary_vertex(v)) {
+        EXPECT_GE(server[v], 0) << v;
+      }
   }
 }
 

@@ -56,6 +56,10 @@ KnotCheck check_knot_conditions(const Domain& domain, int degree, std::span<cons
 /// where lines of different directions meet serves only one of them.
 std::vector<int> feature_servers(const Domain& domain);
 
+/// Traas's radius at vertex v: half the smallest height, at v, of the triangles around it.
+/// Sub-knots strictly inside this circle keep the knot conditions (paper section 4.3).
+double traas_radius(const Domain& domain, int v);
+
 /// Default knots (Traas's scheme): the sub-knots of vertex i lie inside the circle of radius
 /// r_i = half the smallest height at t_i, at between tol::kSubKnotMin and tol::kSubKnotMax
 /// times r_i, in a fixed pseudo-random pattern (no three collinear in practice, so C^(n-1));
