@@ -16,12 +16,17 @@
 #include <cstdio>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <numeric>
 
 namespace tbs {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// Below this many points there are too few neighbours to estimate normals: the fairness term
+// is left out.
+constexpr size_t kMinPointsForNormals = 20;
 
 double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
@@ -132,6 +137,17 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
     throw InvalidInput(name + ": " + std::to_string(scan.normals.size()) + " normals for " +
                        std::to_string(N) + " points");
   if (N < 3) throw InvalidInput(name + ": a fit needs at least 3 points, got " + std::to_string(N));
+  for (size_t i = 0; i < N; ++i) {
+    if (!scan.positions[i].allFinite() || !scan.uv[i].allFinite() ||
+        (scan.has_normals() && !scan.normals[i].allFinite()))
+      throw InvalidInput(name + ": point " + std::to_string(i) +
+                         " has a non-finite coordinate, parameter or normal");
+  }
+  for (const auto& t : scan.triangles)
+    for (int v : t)
+      if (v < 0 || static_cast<size_t>(v) >= N)
+        throw InvalidInput(name + ": a triangle refers to point " + std::to_string(v) + " of " +
+                           std::to_string(N));
 
   FitResult res;
   FitReport& rep = res.report;
@@ -158,9 +174,14 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
     const auto t0 = Clock::now();
     if (scan.has_normals()) {
       normals = scan.normals;
-    } else if (opt.fairness > 0) {
+    } else if (opt.fairness > 0 && N >= kMinPointsForNormals) {
       progress("normals", "estimating normals of " + std::to_string(N) + " points", 0);
-      normals = estimate_normals(scan.positions, scan.uv, scan.triangles);
+      try {
+        normals = estimate_normals(scan.positions, scan.uv, scan.triangles);
+      } catch (const InvalidInput& e) {
+        throw InvalidInput(name + ": cannot estimate normals (" + e.what() +
+                           "); give normals in the input, or turn the fairness term off (--fairness 0)");
+      }
       rep.normals_estimated = true;
     } else {
       normals.assign(N, Vector3::Zero());
@@ -174,7 +195,13 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
   progress("domain", "building the domain (about " + std::to_string(target) + " triangles)", 0);
   auto t0 = Clock::now();
   detail::DomainInput din{scan.uv, scan.positions, scan.triangles, target, opt.features, opt.feature_angle};
-  detail::FitDomain fdom(din);
+  std::unique_ptr<detail::FitDomain> fdom_ptr;
+  try {
+    fdom_ptr = std::make_unique<detail::FitDomain>(din);
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(name + ": " + e.what());
+  }
+  detail::FitDomain& fdom = *fdom_ptr;
   stage["domain"] += seconds_since(t0);
 
   // The fairness term of a point is weighted by the squared longest edge of its domain

@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <numbers>
 #include <random>
 
@@ -94,6 +95,18 @@ TEST(Fit, CollinearParametersAreRefused) {
     s.uv.emplace_back(i, 2 * i);
   }
   EXPECT_THROW(fit(s, {}), InvalidInput);
+}
+
+TEST(Fit, NonFiniteDataAndBadTrianglesAreRefused) {
+  Scan s = random_scan([](double u, double v) { return Point3(u, v, 0); }, 100, 3);
+  s.uv[17].x() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(fit(s, {}), InvalidInput);
+  s = random_scan([](double u, double v) { return Point3(u, v, 0); }, 100, 3);
+  s.triangles.push_back({0, 1, 100});
+  EXPECT_THROW(fit(s, {}), InvalidInput);
+  FitOptions o;
+  o.degree = 9;
+  EXPECT_THROW(fit(random_scan([](double u, double v) { return Point3(u, v, 0); }, 100, 3), o), InvalidInput);
 }
 
 TEST(Fit, FoldedParametersAreRefused) {
