@@ -268,6 +268,8 @@ int run_fit(const FitCommandOptions& o) {
   std::printf("%-18s %s\n", "input", o.input.c_str());
   std::printf("%-18s %s\n", "output", o.output.c_str());
   std::printf("%-18s %zu\n", "points", rep.points);
+  if (rep.points_excluded > 0)
+    std::printf("%-18s %zu (outside the largest parameter region)\n", "points left out", rep.points_excluded);
   std::printf("%-18s %d\n", "degree", rep.degree);
   std::printf("%-18s %d\n", "domain triangles", rep.domain_triangles);
   std::printf("%-18s %d\n", "control points", rep.control_points);

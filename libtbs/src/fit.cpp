@@ -88,6 +88,7 @@ std::string FitReport::to_json(bool with_times) const {
   nlohmann::ordered_json j;
   j["points"] = points;
   j["points_moved"] = points_moved;
+  j["points_excluded"] = points_excluded;
   j["degree"] = degree;
   j["domain_triangles"] = domain_triangles;
   j["domain_vertices"] = domain_vertices;
@@ -258,6 +259,7 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
     size_t used = 0;
     for (size_t i = 0; i < N; ++i) used += located[i] >= 0;
     if (used == 0) throw InvalidInput(name + ": no point lies in the fitting domain");
+    rep.points_excluded = N - used;
     stage["domain"] += seconds_since(t0);
 
     auto make_points = [&] {

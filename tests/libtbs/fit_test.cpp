@@ -109,6 +109,21 @@ TEST(Fit, NonFiniteDataAndBadTrianglesAreRefused) {
   EXPECT_THROW(fit(random_scan([](double u, double v) { return Point3(u, v, 0); }, 100, 3), o), InvalidInput);
 }
 
+// A far-away cluster of parameters is not part of the region: left out and reported.
+TEST(Fit, OutlyingParametersAreLeftOutAndCounted) {
+  auto f = [](double u, double v) { return Point3(u, v, 0.1 * u * v); };
+  Scan s = random_scan(f, 3000, 41);
+  for (int i = 0; i < 5; ++i) {
+    s.uv.emplace_back(5.0 + 0.01 * i, 5.0 + 0.02 * (i % 2));
+    s.positions.push_back(f(0.5, 0.5));
+  }
+  FitOptions o;
+  const FitResult r = fit(s, o);
+  EXPECT_EQ(r.report.points_excluded, 5u);
+  EXPECT_TRUE(r.report.converged) << r.report.stop_reason;
+  for (size_t i = 3000; i < 3005; ++i) EXPECT_TRUE(std::isnan(r.error[i]));
+}
+
 TEST(Fit, FoldedParametersAreRefused) {
   Scan s = grid_scan([](double u, double v) { return Point3(u, v, 0); }, 10, 10, 0, 1);
   std::swap(s.triangles[30][1], s.triangles[30][2]);  // one face flipped in uv
@@ -355,6 +370,7 @@ TEST(Fit, TwoHolesStayHoles) {
     EXPECT_LT(ev.locate(c + Point2(0.5 * rad, 0)), 0);
   }
   // Every point is covered.
+  EXPECT_EQ(r.report.points_excluded, 0u);
   size_t located = 0;
   for (const auto& uv : r.uv) located += ev.locate(uv) >= 0;
   EXPECT_EQ(located, s.positions.size());

@@ -55,6 +55,9 @@ struct FitOptions {
 struct FitReport {
   size_t points = 0;
   size_t points_moved = 0;  ///< parameters nudged into the domain (on its simplified boundary)
+  /// Points left out of the fit: outliers outside the largest parameter region (bare points),
+  /// or points of other mesh components. Their error is NaN.
+  size_t points_excluded = 0;
   double max_uv_move = 0;   ///< largest such nudge, in parameter units
   int degree = 0;
   int domain_triangles = 0;
