@@ -579,6 +579,17 @@ void douglas_peucker(std::span<const Point2> p, size_t i, size_t j, double tol, 
   }
 }
 
+// The points of a polyline that Douglas-Peucker keeps at tolerance tol (ends always kept).
+std::vector<Point2> simplified(const std::vector<Point2>& line, double tol) {
+  std::vector<char> keep(line.size(), 0);
+  keep.front() = keep.back() = 1;
+  douglas_peucker(line, 0, line.size() - 1, tol, keep);
+  std::vector<Point2> out;
+  for (size_t q = 0; q < line.size(); ++q)
+    if (keep[q]) out.push_back(line[q]);
+  return out;
+}
+
 // Adds points so that no segment of the polyline is longer than h.
 std::vector<Point2> resample(const std::vector<Point2>& poly, double h, bool closed) {
   std::vector<Point2> out;
@@ -607,6 +618,32 @@ bool segments_cross(const Point2& a, const Point2& b, const Point2& c, const Poi
   return CGAL::do_intersect(K::Segment_2(cp(a), cp(b)), K::Segment_2(cp(c), cp(d)));
 }
 
+// Nesting level of every face of a constrained triangulation: 0 for the infinite face, one
+// more across each edge for which crosses(a, b) holds (a, b: the edge's finite vertices).
+// Odd levels are inside the domain, even levels above 0 inside its holes.
+template <class Tr, class Crosses>
+std::unordered_map<typename Tr::Face_handle, int> nesting_levels(const Tr& t, Crosses crosses) {
+  std::unordered_map<typename Tr::Face_handle, int> level;
+  std::deque<std::pair<typename Tr::Face_handle, int>> queue{{t.infinite_face(), 0}};
+  level[t.infinite_face()] = 0;
+  while (!queue.empty()) {
+    auto [f, l] = queue.front();
+    queue.pop_front();
+    for (int k = 0; k < 3; ++k) {
+      auto g = f->neighbor(k);
+      if (level.count(g)) continue;
+      auto va = f->vertex(Tr::cw(k)), vb = f->vertex(Tr::ccw(k));
+      const bool across = !t.is_infinite(va) && !t.is_infinite(vb) && f->is_constrained(k) && crosses(va, vb);
+      level[g] = across ? l + 1 : l;
+      if (across)
+        queue.push_back({g, l + 1});
+      else
+        queue.push_front({g, l});
+    }
+  }
+  return level;
+}
+
 }  // namespace
 
 struct FitDomain::Impl {
@@ -625,27 +662,10 @@ struct FitDomain::Impl {
   }
 
   void mark_domain() {
-    for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->info() = -1;
-    std::deque<std::pair<WCdt::Face_handle, int>> queue{{cdt.infinite_face(), 0}};
-    cdt.infinite_face()->info() = 0;
-    while (!queue.empty()) {
-      auto [f, level] = queue.front();
-      queue.pop_front();
-      for (int k = 0; k < 3; ++k) {
-        auto g = f->neighbor(k);
-        if (g->info() >= 0) continue;
-        const int a = f->vertex(WCdt::cw(k))->info(), b = f->vertex(WCdt::ccw(k))->info();
-        const bool crosses = !cdt.is_infinite(f->vertex(WCdt::cw(k))) &&
-                             !cdt.is_infinite(f->vertex(WCdt::ccw(k))) &&
-                             f->is_constrained(k) && boundary_edges.count(edge_key(a, b));
-        const int gl = crosses ? level + 1 : level;
-        g->info() = gl;
-        if (crosses)
-          queue.push_back({g, gl});
-        else
-          queue.push_front({g, gl});
-      }
-    }
+    const auto level = nesting_levels(cdt, [&](WCdt::Vertex_handle a, WCdt::Vertex_handle b) {
+      return boundary_edges.count(edge_key(a->info(), b->info())) > 0;
+    });
+    for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->info() = level.at(f);
   }
 
   void rebuild_domain() {
@@ -819,12 +839,7 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
       std::vector<Point2> raw;
       for (int v : c) raw.push_back(moved.count(v) ? moved[v] : in.uv[v]);
       const bool closed = c.front() == c.back();
-      std::vector<char> keep(raw.size(), 0);
-      keep.front() = keep.back() = 1;
-      douglas_peucker(raw, 0, raw.size() - 1, 0.5 * tau, keep);
-      std::vector<Point2> line;
-      for (size_t q = 0; q < raw.size(); ++q)
-        if (keep[q]) line.push_back(raw[q]);
+      std::vector<Point2> line = simplified(raw, 0.5 * tau);
       if (closed) line.pop_back();
       flines.push_back(resample(line, 1.2 * h, closed));
       if (closed) flines.back().push_back(flines.back().front());
@@ -859,13 +874,7 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
         else
           line.push_back(hit);
       }
-      std::vector<char> keep(line.size(), 0);
-      keep.front() = keep.back() = 1;
-      douglas_peucker(line, 0, line.size() - 1, 0.1 * h, keep);
-      std::vector<Point2> simple;
-      for (size_t q = 0; q < line.size(); ++q)
-        if (keep[q]) simple.push_back(line[q]);
-      flines.push_back(resample(simple, 1.2 * h, false));
+      flines.push_back(resample(simplified(line, 0.1 * h), 1.2 * h, false));
     }
     for (auto& p : polys)
       for (auto& q : p) q = m.snap(q);
@@ -941,25 +950,9 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
         auto a = vid.find({s[0].x(), s[0].y()}), b = vid.find({s[1].x(), s[1].y()});
         if (a != vid.end() && b != vid.end()) bset.insert(edge_key(a->second, b->second));
       }
-      std::unordered_map<MCdt::Face_handle, int> level;
-      std::deque<std::pair<MCdt::Face_handle, int>> q{{mcdt.infinite_face(), 0}};
-      level[mcdt.infinite_face()] = 0;
-      while (!q.empty()) {
-        auto [f, l] = q.front();
-        q.pop_front();
-        for (int k = 0; k < 3; ++k) {
-          auto g = f->neighbor(k);
-          if (level.count(g)) continue;
-          auto va = f->vertex(MCdt::cw(k)), vb = f->vertex(MCdt::ccw(k));
-          const bool crosses = !mcdt.is_infinite(va) && !mcdt.is_infinite(vb) && f->is_constrained(k) &&
-                               bset.count(edge_key(va->info(), vb->info()));
-          level[g] = crosses ? l + 1 : l;
-          if (crosses)
-            q.push_back({g, l + 1});
-          else
-            q.push_front({g, l});
-        }
-      }
+      auto level = nesting_levels(mcdt, [&](MCdt::Vertex_handle a, MCdt::Vertex_handle b) {
+        return bset.count(edge_key(a->info(), b->info())) > 0;
+      });
       for (auto f = mcdt.finite_faces_begin(); f != mcdt.finite_faces_end(); ++f)
         if (level[f] > 0 && level[f] % 2 == 0)
           seeds.push_back(CGAL::centroid(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point()));
