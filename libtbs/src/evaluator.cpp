@@ -291,9 +291,22 @@ struct Evaluator::Impl {
     return reference::simplex_spline(std::span<const Point2>(pts.data(), k.size), p);
   }
 
-  std::optional<std::pair<int, Perturbation>> prepare(const Point2& u) const {
+  std::optional<std::pair<int, Perturbation>> prepare(const Point2& u,
+                                                      const Perturbation* given = nullptr) const {
     if (!u.allFinite()) return std::nullopt;
     const Domain& d = s->domain();
+    if (given) {
+      // A caller-chosen side: the triangle that contains the perturbed point, if any.
+      for (int t : tri_grid.at(u)) {
+        if (!tri_box[t].contains(u)) continue;
+        const auto& tri = d.triangle(t);
+        const Point2 &a = d.vertex(tri[0]), &b = d.vertex(tri[1]), &c = d.vertex(tri[2]);
+        if (perturbed_orientation(a, b, *given) > 0 && perturbed_orientation(b, c, *given) > 0 &&
+            perturbed_orientation(c, a, *given) > 0)
+          return std::pair{t, *given};
+      }
+      return std::nullopt;
+    }
     const Perturbation ps = Perturbation::standard(u);
     const auto cand = tri_grid.at(u);
     for (int t : cand) {
@@ -325,8 +338,8 @@ struct Evaluator::Impl {
 
   // Calls emit(top, M) for every term of the degree n-1 form that is non-zero at u.
   template <class Emit>
-  bool accumulate(const Point2& u, Emit&& emit) const {
-    const auto loc = prepare(u);
+  bool accumulate(const Point2& u, Emit&& emit, const Perturbation* given = nullptr) const {
+    const auto loc = prepare(u, given);
     if (!loc) return false;
     const Perturbation& p = loc->second;
     Scratch& sc = scratch.local();
@@ -343,7 +356,8 @@ struct Evaluator::Impl {
     return true;
   }
 
-  bool evaluate(const Point2& u, Point3& f, Vector3& fu, Vector3& fv) const {
+  bool evaluate(const Point2& u, Point3& f, Vector3& fu, Vector3& fv,
+                const Perturbation* given = nullptr) const {
     const auto& cps = s->control_points();
     f.setZero();
     fu.setZero();
@@ -359,7 +373,7 @@ struct Evaluator::Impl {
       f += m * (w0 * c0 + w1 * c1 + w2 * c2);
       fu += m * (top.gx[0] * c0 + top.gx[1] * c1 + top.gx[2] * c2);
       fv += m * (top.gy[0] * c0 + top.gy[1] * c1 + top.gy[2] * c2);
-    });
+    }, given);
     fu *= n;
     fv *= n;
     return ok;
@@ -397,6 +411,13 @@ Point3 Evaluator::value(const Point2& u) const { return evaluate(u).position; }
 SurfacePoint Evaluator::evaluate(const Point2& u) const {
   SurfacePoint r;
   if (!impl_->evaluate(u, r.position, r.du, r.dv)) outside(u);
+  return r;
+}
+
+std::optional<SurfacePoint> Evaluator::evaluate(const Point2& u, const Perturbation& side) const {
+  SurfacePoint r;
+  if (side.u != u) throw InvalidInput("Evaluator::evaluate: the perturbation is not of u");
+  if (!impl_->evaluate(u, r.position, r.du, r.dv, &side)) return std::nullopt;
   return r;
 }
 

@@ -67,6 +67,12 @@ class Evaluator {
   Point3 value(const Point2& u) const;
   /// F(u), F_u(u), F_v(u). \throw OutsideDomain if u is not in the domain.
   SurfacePoint evaluate(const Point2& u) const;
+  /// F(u), F_u(u), F_v(u) of the polynomial piece on a chosen side of u: the one that holds
+  /// the perturbed point side.u + eps (side.c - side.u) + eps^2 (side.d - side.u). On a knot
+  /// line or a feature edge this picks the piece (and the one-sided derivatives) of that side.
+  /// \return empty if the perturbed point is outside the domain.
+  /// \throw InvalidInput if side.u != u.
+  std::optional<SurfacePoint> evaluate(const Point2& u, const Perturbation& side) const;
   /// The directional derivative D_dir F(u). \throw OutsideDomain.
   Vector3 derivative(const Point2& u, const Vector2& dir) const;
   /// The unit normal F_u x F_v / |F_u x F_v| (zero where the surface is singular).
