@@ -1,0 +1,84 @@
+#pragma once
+/// \file
+/// How far scanned points are from the fitted surface, per point and as images over the
+/// parameter domain (an error map, and a geometry image of surface positions and normals).
+
+#include <tbs/spline.h>
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace tbs {
+
+/// Summary statistics of point distances (model units). Percentiles are of the unsigned
+/// distance, by the nearest-rank rule.
+struct ErrorStats {
+  size_t count = 0;        ///< Points measured (inside the domain).
+  double max = 0;          ///< Largest distance.
+  double mean = 0;
+  double rms = 0;
+  double p50 = 0, p90 = 0, p95 = 0, p99 = 0;
+  double min_signed = 0;   ///< Most negative signed distance (below the surface).
+  double max_signed = 0;   ///< Most positive signed distance (above the surface).
+};
+
+/// Per-point errors of a fit: the point p_i against the surface point F(u_i) at its
+/// parameter, the measure the fitter minimises.
+struct PointErrors {
+  std::vector<double> distance;  ///< |p_i - F(u_i)|; NaN for a parameter outside the domain.
+  /// (p_i - F(u_i)) . N(u_i): positive on the side the normal points to. NaN outside.
+  std::vector<double> signed_distance;
+  size_t outside = 0;            ///< Points whose parameter is outside the domain.
+  ErrorStats stats;
+};
+
+/// Measures every point. \pre points.size() == uv.size().
+/// \throw InvalidInput if the sizes differ.
+PointErrors point_errors(const Spline& spline, std::span<const Point3> points,
+                         std::span<const Point2> uv, int threads = 0);
+
+/// Statistics of a set of distances (NaNs skipped); signed values may be empty.
+ErrorStats error_stats(std::span<const double> distance, std::span<const double> signed_distance);
+
+struct ErrorMapOptions {
+  int width = 512;   ///< Pixels across u.
+  int height = 0;    ///< Pixels across v; 0 keeps the domain's aspect ratio.
+  int threads = 0;
+};
+
+/// What a pixel holds (ErrorMap::mask).
+enum class PixelKind : uint8_t {
+  Outside = 0,       ///< The pixel centre is outside the domain (or in a hole).
+  Measured = 1,      ///< At least one point falls into the pixel.
+  Interpolated = 2,  ///< Inside the domain but without points: filled from its neighbours.
+};
+
+/// Images over the rectangle of the domain's bounding box. Pixel (x, y) covers
+/// u in [u0 + x du, u0 + (x+1) du), v from the top: v in (v1 - (y+1) dv, v1 - y dv], so that
+/// row 0 is the largest v (the image convention). Arrays are row-major, width * height
+/// entries (3 per pixel for positions and normals).
+struct ErrorMap {
+  int width = 0, height = 0;
+  Box2 domain;                       ///< The rectangle covered.
+  std::vector<PixelKind> mask;
+  /// Largest |distance| of the pixel's points (interpolated where mask is Interpolated; 0
+  /// outside).
+  std::vector<float> error;
+  /// Signed distance of largest magnitude among the pixel's points (likewise).
+  std::vector<float> signed_error;
+  std::vector<float> rms;            ///< RMS distance of the pixel's points.
+  std::vector<uint32_t> count;       ///< Points in the pixel.
+  std::vector<float> position;       ///< F at the pixel centre (0 outside).
+  std::vector<float> normal;         ///< Unit normal at the pixel centre (0 outside).
+  std::vector<int32_t> triangle;     ///< Domain triangle at the pixel centre, -1 outside.
+  ErrorStats stats;                  ///< Of the points (equal to the per-point statistics).
+};
+
+/// Rasterises point errors and samples the surface at pixel centres.
+/// \pre errors were computed by point_errors() for the same uv.
+/// \throw InvalidInput if the sizes are out of range (1 to 16384 pixels a side) or differ.
+ErrorMap make_error_map(const Spline& spline, std::span<const Point2> uv, const PointErrors& errors,
+                        const ErrorMapOptions& options = {});
+
+}  // namespace tbs
