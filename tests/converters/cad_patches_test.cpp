@@ -2,6 +2,7 @@
 #include <tbs/cad_patches.h>
 #include <tbs/errors.h>
 #include <tbs/evaluator.h>
+#include <tbs/knots.h>
 #include <tbs/predicates.h>
 
 #include "random_spline.h"
@@ -14,19 +15,21 @@
 namespace tbs {
 namespace {
 
-// A height field over the unit square with random heights: regular everywhere, like a scan.
-// (Random control points in all three coordinates make surfaces that fold over themselves,
-// where normals are undefined.)
+// A height field over the unit square, like a scan: control points at the blossom points
+// (u, v, g(u, v)) with a smooth g, plus a crease of about 53 degrees along the feature line
+// x = 0.5 when there is one. The knots are Traas's default ones, as a fit starts from.
 Spline make_spline(int degree, bool features, uint64_t seed, int cells = 4) {
   test::GridOptions o;
   o.nx = o.ny = cells;
   o.feature_column = features ? cells / 2 : -1;
-  Spline s = test::random_spline(degree, o, seed);
+  const Spline r = test::random_spline(degree, o, seed);
+  Spline s(degree, r.domain(), default_knots(r.domain(), degree), r.control_points(), r.control_point_map());
   for (int t = 0; t < s.domain().triangle_count(); ++t)
     for (int i = 0; i < beta_count(degree); ++i) {
       const Point2 b = s.blossom_point(t, beta_at(degree, i));
-      Point3& c = s.control_points()[s.control_point_index(t, i)];
-      c = Point3(b.x(), b.y(), 0.2 * c.z());
+      const double z = 0.2 * std::sin(3 * b.x() + seed) * std::cos(2 * b.y()) +
+                       (features ? 0.5 * std::fabs(b.x() - 0.5) : 0.0);
+      s.control_points()[s.control_point_index(t, i)] = Point3(b.x(), b.y(), z);
     }
   return s;
 }

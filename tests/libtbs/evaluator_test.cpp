@@ -155,6 +155,42 @@ TEST(Evaluator, BoundaryPointsAreLimitsFromInside) {
   EXPECT_GT(checked, 40);
 }
 
+// On a feature edge the chosen side gives that side's one-sided derivatives: the limits of
+// F_u, F_v from that side.
+TEST(Evaluator, EvaluateOnAChosenSideGivesOneSidedLimits) {
+  test::GridOptions o = grid();
+  o.feature_column = 3;
+  const Spline s = test::random_spline(3, o, 19);
+  const Evaluator ev(s);
+  const Domain& d = s.domain();
+  int checked = 0;
+  for (const auto& fe : d.feature_edges()) {
+    const Point2 a = d.vertex(fe[0]), b = d.vertex(fe[1]);
+    const Point2 u = 0.5 * (a + b);
+    const Vector2 n = Vector2(-(b - a).y(), (b - a).x()).normalized();
+    for (double sign : {1.0, -1.0}) {
+      const auto side = ev.evaluate(u, Perturbation::toward(u, u + sign * n, b));
+      ASSERT_TRUE(side);
+      const SurfacePoint near = ev.evaluate(u + sign * 1e-9 * n);
+      EXPECT_LT((side->position - near.position).norm(), 1e-7);
+      EXPECT_LT((side->du - near.du).norm(), 1e-5 * (1 + near.du.norm()));
+      EXPECT_LT((side->dv - near.dv).norm(), 1e-5 * (1 + near.dv.norm()));
+    }
+    const auto left = ev.evaluate(u, Perturbation::toward(u, u + n, b));
+    const auto right = ev.evaluate(u, Perturbation::toward(u, u - n, b));
+    EXPECT_LT((left->position - right->position).norm(), 1e-12);  // C^0 ...
+    EXPECT_GT((left->du - right->du).norm() + (left->dv - right->dv).norm(), 1e-6);  // ... not C^1
+    ++checked;
+  }
+  EXPECT_GT(checked, 3);
+  // Outside the domain there is no side; a perturbation of another point is refused.
+  const Point2 corner(0, 0);
+  EXPECT_FALSE(ev.evaluate(corner, Perturbation::toward(corner, Point2(-1, -1), Point2(-1, 0))));
+  EXPECT_TRUE(ev.evaluate(corner, Perturbation::toward(corner, Point2(1, 1), Point2(1, 0))));
+  EXPECT_THROW(ev.evaluate(corner, Perturbation::toward(Point2(0.5, 0.5), Point2(1, 1), Point2(1, 0))),
+               InvalidInput);
+}
+
 TEST(Evaluator, UpdateKnotsEqualsAFreshEvaluator) {
   Spline s = test::random_spline(3, grid(), 17);
   Evaluator ev(s);

@@ -29,7 +29,7 @@ struct CadPatchOptions {
   /// Largest allowed angle, in degrees, between the normals of two patches that meet where
   /// the spline is smooth. Each patch keeps within half of it of the spline's normal (on its
   /// own side of a feature edge, so creases keep their angle).
-  double angle_tolerance = 0.5;
+  double angle_tolerance = 1.0;
   /// Deepest 1-to-4 split (a patch then spans 4^-max_level of its domain triangle). Where the
   /// tolerance is not met at this depth, the result says so (within_tolerance = false).
   int max_level = 10;
