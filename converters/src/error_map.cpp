@@ -2,6 +2,8 @@
 #include <tbs/errors.h>
 #include <tbs/evaluator.h>
 
+#include <Eigen/LU>
+
 #include "side_eval.h"
 
 #include <tbb/parallel_for.h>
@@ -49,18 +51,65 @@ ErrorStats error_stats(std::span<const double> distance, std::span<const double>
   return st;
 }
 
+namespace {
+
+// Gauss-Newton steps toward the closest surface point from the parameter u, staying in the
+// domain; a step is taken only if it brings the surface closer.
+Point2 closest_parameter(const Evaluator& ev, const Point3& p, Point2 u, double scale) {
+  SurfacePoint f = ev.evaluate(u);
+  double best = (p - f.position).squaredNorm();
+  for (int iter = 0; iter < 20; ++iter) {
+    const Vector3 r = p - f.position;
+    Eigen::Matrix2d jtj;
+    jtj << f.du.dot(f.du), f.du.dot(f.dv), f.du.dot(f.dv), f.dv.dot(f.dv);
+    const Eigen::Vector2d jtr(f.du.dot(r), f.dv.dot(r));
+    if (std::fabs(jtj.determinant()) <= 1e-300) break;
+    Eigen::Vector2d step = jtj.inverse() * jtr;
+    bool moved = false;
+    for (int half = 0; half < 30; ++half, step *= 0.5) {
+      const Point2 v = u + step;
+      if (ev.locate(v) < 0) continue;
+      const SurfacePoint g = ev.evaluate(v);
+      const double d = (p - g.position).squaredNorm();
+      if (d < best) {
+        best = d;
+        u = v;
+        f = g;
+        moved = true;
+        break;
+      }
+    }
+    if (!moved || step.norm() <= 1e-13 * scale) break;
+  }
+  return u;
+}
+
+}  // namespace
+
 PointErrors point_errors(const Spline& s, std::span<const Point3> points, std::span<const Point2> uv,
-                         int threads) {
+                         const PointErrorOptions& o) {
   if (points.size() != uv.size())
     throw InvalidInput("point_errors: " + std::to_string(points.size()) + " points but " +
                        std::to_string(uv.size()) + " parameters");
   const Evaluator ev(s);
   PointErrors out;
+  out.measure = o.measure;
   const size_t n = points.size();
+  out.foot.assign(uv.begin(), uv.end());
+  tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
+  if (o.measure == ErrorMeasure::Closest) {
+    const Box2 box = s.domain().bounding_box();
+    const double scale = std::max((box.max - box.min).norm(), 1e-300);
+    arena.execute([&] {
+      tbb::parallel_for(size_t(0), n, [&](size_t i) {
+        if (ev.locate(uv[i]) >= 0) out.foot[i] = closest_parameter(ev, points[i], uv[i], scale);
+      });
+    });
+  }
   std::vector<Point3> f(n);
   std::vector<Vector3> du(n), dv(n);
   std::vector<uint8_t> inside(n);
-  out.outside = ev.evaluate_batch(uv, f, du, dv, inside, threads);
+  out.outside = ev.evaluate_batch(out.foot, f, du, dv, inside, o.threads);
   out.distance.resize(n);
   out.signed_distance.resize(n);
   const double nan = std::numeric_limits<double>::quiet_NaN();

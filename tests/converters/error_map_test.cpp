@@ -162,6 +162,43 @@ TEST(ErrorMap, AFitsResidualsAreWhatTheMapShows) {
   EXPECT_NEAR(max, e.stats.max, 1e-7 * e.stats.max);
 }
 
+TEST(ErrorMap, ClosestPointDistanceIgnoresSlidingAlongTheSurface) {
+  // A height field (a scan-like surface; random control points make folded ones).
+  Spline s = holed_spline(54);
+  for (int t = 0; t < s.domain().triangle_count(); ++t)
+    for (int i = 0; i < beta_count(3); ++i) {
+      const Point2 b = s.blossom_point(t, beta_at(3, i));
+      s.control_points()[s.control_point_index(t, i)] =
+          Point3(b.x(), b.y(), 0.2 * std::sin(3 * b.x()) * std::cos(2 * b.y()));
+    }
+  const Evaluator ev(s);
+  // Points on the surface, but paired with a parameter a little off: the parameter measure
+  // sees the slide, the closest-point measure does not. Points off along the normal: both see
+  // the offset.
+  std::vector<Point2> uv, moved;
+  std::vector<Point3> on, off;
+  for (const Point2& u : test::random_domain_points(s.domain(), 400, 9)) {
+    const Point2 w = u + Point2(0.004, -0.003);
+    if (ev.locate(w) < 0 || ev.locate(u + Point2(0.02, -0.02)) < 0 || ev.locate(u - Point2(0.02, -0.02)) < 0) continue;
+    uv.push_back(u);
+    moved.push_back(w);
+    on.push_back(ev.value(u));
+    off.push_back(ev.value(u) + 2e-3 * ev.normal(u));
+  }
+  ASSERT_GT(uv.size(), 200u);
+  const PointErrors param = point_errors(s, on, moved);
+  const PointErrors closest = point_errors(s, on, moved, {.measure = ErrorMeasure::Closest});
+  EXPECT_GT(param.stats.rms, 1e-3);
+  EXPECT_LT(closest.stats.max, 1e-9);
+  for (size_t i = 0; i < uv.size(); ++i) ASSERT_LE(closest.distance[i], param.distance[i]);
+  const PointErrors normal = point_errors(s, off, uv, {.measure = ErrorMeasure::Closest});
+  for (size_t i = 0; i < uv.size(); ++i) {
+    // The foot of a normal offset is the point itself (a local minimum of the distance).
+    ASSERT_NEAR(normal.distance[i], 2e-3, 1e-9);
+    ASSERT_NEAR(normal.signed_distance[i], 2e-3, 1e-9);
+  }
+}
+
 TEST(ErrorMap, RejectsBadSizes) {
   const Spline s = holed_spline(53);
   const Synthetic syn = offset_points(s, 10, 4);

@@ -23,12 +23,30 @@ struct ErrorStats {
   double max_signed = 0;   ///< Most positive signed distance (above the surface).
 };
 
-/// Per-point errors of a fit: the point p_i against the surface point F(u_i) at its
-/// parameter, the measure the fitter minimises.
+/// How a point's distance to the surface is measured.
+enum class ErrorMeasure {
+  /// |p - F(u)| at the point's own parameter u: the measure the fitter minimises and its
+  /// report's max / RMS error. An upper bound of the distance to the surface.
+  Parameter,
+  /// |p - F(u*)| at the closest surface point F(u*), found by Gauss-Newton steps from u
+  /// within the domain: the geometric distance (to the nearest local foot point), the one to
+  /// compare with other surfaces.
+  Closest,
+};
+
+struct PointErrorOptions {
+  ErrorMeasure measure = ErrorMeasure::Parameter;
+  int threads = 0;  ///< Worker threads, 0 for all cores. The result does not depend on it.
+};
+
+/// Per-point errors of a fit, by the chosen measure.
 struct PointErrors {
-  std::vector<double> distance;  ///< |p_i - F(u_i)|; NaN for a parameter outside the domain.
-  /// (p_i - F(u_i)) . N(u_i): positive on the side the normal points to. NaN outside.
+  ErrorMeasure measure = ErrorMeasure::Parameter;
+  std::vector<double> distance;  ///< |p_i - F(u)|; NaN for a parameter outside the domain.
+  /// (p_i - F(u)) . N(u): positive on the side the normal points to. NaN outside.
   std::vector<double> signed_distance;
+  /// The parameter u measured at: the point's own, or its foot point (ErrorMeasure::Closest).
+  std::vector<Point2> foot;
   size_t outside = 0;            ///< Points whose parameter is outside the domain.
   ErrorStats stats;
 };
@@ -36,7 +54,7 @@ struct PointErrors {
 /// Measures every point. \pre points.size() == uv.size().
 /// \throw InvalidInput if the sizes differ.
 PointErrors point_errors(const Spline& spline, std::span<const Point3> points,
-                         std::span<const Point2> uv, int threads = 0);
+                         std::span<const Point2> uv, const PointErrorOptions& options = {});
 
 /// Statistics of a set of distances (NaNs skipped); signed values may be empty.
 ErrorStats error_stats(std::span<const double> distance, std::span<const double> signed_distance);
