@@ -5,6 +5,8 @@ TBS_PACKAGES=(
   build-essential cmake pkg-config
   libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev
   libtbb-dev nlohmann-json3-dev libcli11-dev libsuitesparse-dev libtinyobjloader-dev
+  libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
+  libocct-data-exchange-dev libocct-ocaf-dev libocct-visualization-dev
 )
 TBS_TEST_PACKAGES=(libgtest-dev libgmock-dev libbenchmark-dev python3 python3-jsonschema libcgal-demo)
 

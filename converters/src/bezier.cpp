@@ -119,4 +119,71 @@ std::vector<Point3> bezier_side(std::span<const Point3> net, int m, int k) {
   return out;
 }
 
+namespace {
+
+// The blossom of a triangular patch at m barycentric arguments: de Casteljau with a
+// different point per step.
+Point3 triangle_blossom(std::span<const Point3> net, int m, std::span<const Bary> args) {
+  std::vector<Point3> w(net.begin(), net.end());
+  for (int k = m; k > 0; --k) casteljau_step(w, k, args[m - k]);
+  return w[0];
+}
+
+double binomial(int n, int k) {
+  if (k < 0 || k > n) return 0;
+  double r = 1;
+  for (int i = 1; i <= k; ++i) r = r * (n - k + i) / i;
+  return r;
+}
+
+}  // namespace
+
+std::vector<Point3> bezier_bilinear_compose(std::span<const Point3> net, int m, const Bary& b00,
+                                            const Bary& b10, const Bary& b01, const Bary& b11) {
+  // The bi-blossom of F(B(s, t)) is the blossom of F at the pairs (s_a, t_b) averaged over all
+  // pairings; at s = 0^(m-i) 1^i, t = 0^(m-j) 1^j a pairing is fixed by the number k of
+  // (1, 1) pairs, which has the hypergeometric weight C(i,k) C(m-i, j-k) / C(m, j).
+  std::vector<Point3> out(static_cast<size_t>((m + 1) * (m + 1)));
+  std::vector<Bary> args(m);
+  for (int j = 0; j <= m; ++j)
+    for (int i = 0; i <= m; ++i) {
+      Point3 c = Point3::Zero();
+      const double total = binomial(m, j);
+      for (int k = std::max(0, i + j - m); k <= std::min(i, j); ++k) {
+        const double w = binomial(i, k) * binomial(m - i, j - k) / total;
+        int a = 0;
+        for (int q = 0; q < k; ++q) args[a++] = b11;
+        for (int q = 0; q < i - k; ++q) args[a++] = b10;
+        for (int q = 0; q < j - k; ++q) args[a++] = b01;
+        for (int q = 0; q < m - i - j + k; ++q) args[a++] = b00;
+        c += w * triangle_blossom(net, m, args);
+      }
+      out[static_cast<size_t>(i + (m + 1) * j)] = c;
+    }
+  return out;
+}
+
+std::array<std::vector<Point3>, 3> bezier_triangle_to_quads(std::span<const Point3> net, int m) {
+  const Bary e[3] = {Bary(1, 0, 0), Bary(0, 1, 0), Bary(0, 0, 1)};
+  const Bary centre = Bary(1, 1, 1) / 3.0;
+  std::array<std::vector<Point3>, 3> out;
+  for (int k = 0; k < 3; ++k) {
+    const Bary& a = e[k];
+    const Bary next = (e[k] + e[(k + 1) % 3]) / 2, prev = (e[k] + e[(k + 2) % 3]) / 2;
+    out[k] = bezier_bilinear_compose(net, m, a, next, prev, centre);
+  }
+  return out;
+}
+
+std::vector<Point3> bezier_triangle_to_collapsed_quad(std::span<const Point3> net, int m) {
+  return bezier_bilinear_compose(net, m, Bary(1, 0, 0), Bary(0, 1, 0), Bary(1, 0, 0), Bary(0, 0, 1));
+}
+
+Point3 bezier_tensor_value(std::span<const Point3> cps, int m, double s, double t) {
+  std::vector<Point3> row(m + 1);
+  for (int j = 0; j <= m; ++j)
+    row[j] = bezier_curve_value(cps.subspan(static_cast<size_t>((m + 1) * j), m + 1), s);
+  return bezier_curve_value(row, t);
+}
+
 }  // namespace tbs

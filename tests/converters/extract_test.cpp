@@ -184,3 +184,33 @@ TEST(Bezier, DerivativesMatchDifferences) {
 
 }  // namespace
 }  // namespace tbs
+
+namespace tbs {
+namespace {
+
+TEST(Bezier, QuadsAndCollapsedQuadEqualTheTriangle) {
+  for (int m : {1, 3, 5, 7}) {
+    std::vector<Point3> net(beta_count(m));
+    for (size_t i = 0; i < net.size(); ++i) net[i] = Point3(std::sin(1.3 * i), std::cos(0.7 * i), 0.1 * i * i);
+    const auto quads = bezier_triangle_to_quads(net, m);
+    const Bary e[3] = {Bary(1, 0, 0), Bary(0, 1, 0), Bary(0, 0, 1)};
+    for (int k = 0; k < 3; ++k)
+      for (double s : {0.0, 0.3, 1.0})
+        for (double t : {0.0, 0.55, 1.0}) {
+          const Bary b00 = e[k], b10 = (e[k] + e[(k + 1) % 3]) / 2, b01 = (e[k] + e[(k + 2) % 3]) / 2,
+                     b11 = Bary(1, 1, 1) / 3;
+          const Bary b = (1 - s) * (1 - t) * b00 + s * (1 - t) * b10 + (1 - s) * t * b01 + s * t * b11;
+          EXPECT_LT((bezier_tensor_value(quads[k], m, s, t) - bezier_value(net, m, b)).norm(), 1e-12)
+              << "m " << m << " quad " << k;
+        }
+    const auto collapsed = bezier_triangle_to_collapsed_quad(net, m);
+    for (double s : {0.0, 0.4, 1.0})
+      for (double t : {0.0, 0.8, 1.0}) {
+        const Bary b(1 - s, s * (1 - t), s * t);
+        EXPECT_LT((bezier_tensor_value(collapsed, m, s, t) - bezier_value(net, m, b)).norm(), 1e-12);
+      }
+  }
+}
+
+}  // namespace
+}  // namespace tbs

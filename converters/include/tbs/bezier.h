@@ -47,4 +47,24 @@ std::vector<Point3> bezier_side(std::span<const Point3> net, int m, int k);
 /// Positions in the net of the side opposite corner k, from corner k+1 to corner k+2.
 std::vector<int> bezier_side_indices(int m, int k);
 
+/// The tensor-product Bezier patch of bidegree (m, m) that equals the triangular patch `net`
+/// composed with the bilinear map (s, t) -> (1-s)(1-t) b00 + s(1-t) b10 + (1-s)t b01 + st b11
+/// of barycentric points: exact, since each barycentric coordinate is bilinear in (s, t).
+/// Control points are row-major, index i + (m+1) j for the i-th along s and j-th along t.
+std::vector<Point3> bezier_bilinear_compose(std::span<const Point3> net, int m, const Bary& b00,
+                                            const Bary& b10, const Bary& b01, const Bary& b11);
+
+/// The three quad patches that tile a triangular patch without degenerate edges: quad k has
+/// corner k at (0,0), the midpoint of the side toward corner k+1 at (1,0), the centroid at
+/// (1,1) and the midpoint of the side toward corner k+2 at (0,1); each is oriented like the
+/// triangle.
+std::array<std::vector<Point3>, 3> bezier_triangle_to_quads(std::span<const Point3> net, int m);
+
+/// One quad patch with the edge s = 0 collapsed to corner 0: (s, t) -> barycentric
+/// (1-s, s(1-t), st).
+std::vector<Point3> bezier_triangle_to_collapsed_quad(std::span<const Point3> net, int m);
+
+/// Value of a tensor-product Bezier patch (layout as above) at (s, t).
+Point3 bezier_tensor_value(std::span<const Point3> cps, int m, double s, double t);
+
 }  // namespace tbs

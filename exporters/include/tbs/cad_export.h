@@ -1,0 +1,70 @@
+#pragma once
+/// \file
+/// STEP and IGES export through OpenCASCADE: every Bezier patch becomes an exact B-spline
+/// face, the faces are sewn into one shell, the shell must pass OCCT's BRepCheck_Analyzer,
+/// and only then is the file written (atomically).
+
+#include <tbs/types.h>
+
+#include <span>
+#include <string>
+#include <vector>
+
+namespace tbs {
+
+struct CadPatches;
+struct Extraction;
+
+/// Triangular Bezier patches of one degree: the input of the CAD writers.
+struct TrianglePatchSet {
+  int degree = 0;
+  std::vector<Point3> control_points;  ///< beta_count(degree) per patch, beta order.
+  size_t size() const;
+};
+/// The compact CAD patches (the default export).
+TrianglePatchSet patch_set(const CadPatches& patches);
+/// The exact pieces (`--exact`).
+TrianglePatchSet patch_set(const Extraction& extraction);
+
+enum class StepSchema { AP214, AP242 };
+
+/// How a triangular patch becomes tensor-product B-spline faces.
+enum class TriangleFaces {
+  Quads,      ///< Three quads meeting at the centroid, none degenerate (the default).
+  Collapsed,  ///< One quad with an edge collapsed to a corner.
+};
+
+struct CadExportOptions {
+  /// Length unit of the coordinates, written into the file: mm, cm, m, um, in, ft. The
+  /// coordinates are written as they are, in this unit.
+  std::string units = "mm";
+  std::string product_name = "tbs surface";
+  /// Free text for the file header (STEP FILE_DESCRIPTION, IGES start section): e.g. the
+  /// fit report.
+  std::string description;
+  StepSchema schema = StepSchema::AP214;
+  TriangleFaces faces = TriangleFaces::Quads;
+  /// Distance within which patch edges are sewn together; 0 means 1e-7 of the model size.
+  double sewing_tolerance = 0;
+};
+
+/// What a writer built.
+struct CadExportReport {
+  size_t faces = 0;        ///< B-spline faces written.
+  size_t shells = 0;       ///< Shells after sewing (1 for a connected surface).
+  size_t free_edges = 0;   ///< Edges with one face: the surface's boundary (and holes).
+  double sewing_tolerance = 0;
+  double seconds = 0;
+};
+
+/// Writes a STEP file. \throw InvalidInput for bad options or an empty patch set; Error if
+/// the sewn shape fails BRepCheck_Analyzer (nothing is written then); IoError if the file
+/// cannot be written.
+CadExportReport write_step(const std::string& path, const TrianglePatchSet& patches,
+                           const CadExportOptions& options = {});
+
+/// Writes an IGES 5.3 file in BRep mode (faces, shell). Throws as write_step().
+CadExportReport write_iges(const std::string& path, const TrianglePatchSet& patches,
+                           const CadExportOptions& options = {});
+
+}  // namespace tbs

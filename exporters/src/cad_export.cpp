@@ -1,0 +1,205 @@
+#include <tbs/bezier.h>
+#include <tbs/cad_export.h>
+#include <tbs/cad_patches.h>
+#include <tbs/errors.h>
+#include <tbs/extract.h>
+#include <tbs/io.h>
+
+#include <APIHeaderSection_MakeHeader.hxx>
+#include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_Sewing.hxx>
+#include <BRepCheck_Analyzer.hxx>
+#include <Geom_BSplineSurface.hxx>
+#include <IGESControl_Controller.hxx>
+#include <IGESData_GlobalSection.hxx>
+#include <IGESData_IGESModel.hxx>
+#include <TColStd_HSequenceOfHAsciiString.hxx>
+#include <IGESControl_Writer.hxx>
+#include <Interface_Static.hxx>
+#include <Message.hxx>
+#include <Message_Messenger.hxx>
+#include <STEPControl_Controller.hxx>
+#include <STEPControl_Writer.hxx>
+#include <ShapeAnalysis_FreeBounds.hxx>
+#include <Standard_Failure.hxx>
+#include <TColStd_Array1OfInteger.hxx>
+#include <TColStd_Array1OfReal.hxx>
+#include <TColgp_Array2OfPnt.hxx>
+#include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Face.hxx>
+#include <TopoDS_Shape.hxx>
+
+#include <chrono>
+#include <filesystem>
+#include <map>
+#include <mutex>
+
+namespace tbs {
+
+size_t TrianglePatchSet::size() const {
+  return degree >= 0 ? control_points.size() / static_cast<size_t>(beta_count(degree)) : 0;
+}
+
+TrianglePatchSet patch_set(const CadPatches& p) { return {p.degree, p.control_points}; }
+TrianglePatchSet patch_set(const Extraction& x) { return {x.degree, x.control_points}; }
+
+namespace {
+
+// OCCT's static parameters are process-wide: one export at a time.
+std::mutex occt_mutex;
+
+// Our unit names -> the names OCCT's STEP and IGES writers use.
+const char* occt_unit(const std::string& u) {
+  static const std::map<std::string, const char*> names = {
+      {"mm", "MM"}, {"cm", "CM"}, {"m", "M"}, {"um", "UM"}, {"in", "INCH"}, {"ft", "FT"}};
+  const auto it = names.find(u);
+  if (it == names.end())
+    throw InvalidInput("unit '" + u + "' cannot be written to STEP or IGES: use mm, cm, m, um, in or ft");
+  return it->second;
+}
+
+Handle(Geom_BSplineSurface) bspline(std::span<const Point3> cps, int m) {
+  TColgp_Array2OfPnt poles(1, m + 1, 1, m + 1);
+  for (int j = 0; j <= m; ++j)
+    for (int i = 0; i <= m; ++i) {
+      const Point3& p = cps[static_cast<size_t>(i + (m + 1) * j)];
+      poles.SetValue(i + 1, j + 1, gp_Pnt(p.x(), p.y(), p.z()));
+    }
+  TColStd_Array1OfReal knots(1, 2);
+  knots.SetValue(1, 0.0);
+  knots.SetValue(2, 1.0);
+  TColStd_Array1OfInteger mults(1, 2);
+  mults.SetValue(1, m + 1);
+  mults.SetValue(2, m + 1);
+  return new Geom_BSplineSurface(poles, knots, knots, mults, mults, m, m);
+}
+
+struct Built {
+  TopoDS_Shape shape;
+  CadExportReport report;
+};
+
+Built build_shape(const TrianglePatchSet& ps, const CadExportOptions& o) {
+  const int m = ps.degree;
+  if (m < 1 || ps.size() == 0) throw InvalidInput("CAD export: there are no patches to write");
+  Box3 box;
+  for (const Point3& p : ps.control_points) {
+    if (!p.allFinite()) throw InvalidInput("CAD export: a control point is not finite");
+    box.extend(p);
+  }
+  const double size = std::max((box.max - box.min).norm(), 1e-300);
+  Built b;
+  b.report.sewing_tolerance = o.sewing_tolerance > 0 ? o.sewing_tolerance : 1e-7 * size;
+  BRepBuilderAPI_Sewing sewing(b.report.sewing_tolerance);
+  const size_t nb = static_cast<size_t>(beta_count(m));
+  for (size_t p = 0; p < ps.size(); ++p) {
+    const std::span<const Point3> net(ps.control_points.data() + p * nb, nb);
+    std::vector<std::vector<Point3>> quads;
+    if (o.faces == TriangleFaces::Quads) {
+      const auto q = bezier_triangle_to_quads(net, m);
+      quads.assign(q.begin(), q.end());
+    } else {
+      quads.push_back(bezier_triangle_to_collapsed_quad(net, m));
+    }
+    for (const auto& q : quads) {
+      BRepBuilderAPI_MakeFace face(bspline(q, m), Precision::Confusion());
+      if (!face.IsDone()) throw Error("CAD export: OpenCASCADE could not make a face of patch " + std::to_string(p));
+      sewing.Add(face.Face());
+      ++b.report.faces;
+    }
+  }
+  sewing.Perform();
+  b.shape = sewing.SewedShape();
+  for (TopExp_Explorer e(b.shape, TopAbs_SHELL); e.More(); e.Next()) ++b.report.shells;
+  b.report.free_edges = static_cast<size_t>(sewing.NbFreeEdges());
+  BRepCheck_Analyzer check(b.shape);
+  if (!check.IsValid())
+    throw Error("CAD export: the sewn shape is not valid for OpenCASCADE (BRepCheck_Analyzer); nothing was written");
+  return b;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void quiet_occt() {
+  // OCCT prints translation chatter to stdout; tbs keeps stdout for its own results.
+  static std::once_flag once;
+  std::call_once(once, [] { Message::DefaultMessenger()->RemovePrinters(STANDARD_TYPE(Message_Printer)); });
+}
+
+}  // namespace
+
+CadExportReport write_step(const std::string& path, const TrianglePatchSet& ps, const CadExportOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const char* unit = occt_unit(o.units);
+  std::lock_guard lock(occt_mutex);
+  quiet_occt();
+  try {
+    Built b = build_shape(ps, o);
+    STEPControl_Controller::Init();
+    // The coordinates are already in `unit`: tell OCCT its session unit is the same, so it
+    // writes them unscaled.
+    Interface_Static::SetCVal("xstep.cascade.unit", unit);
+    Interface_Static::SetCVal("write.step.unit", unit);
+    Interface_Static::SetCVal("write.step.schema", o.schema == StepSchema::AP242 ? "AP242DIS" : "AP214IS");
+    Interface_Static::SetCVal("write.step.product.name", o.product_name.c_str());
+    STEPControl_Writer writer;
+    if (writer.Transfer(b.shape, STEPControl_AsIs) != IFSelect_RetDone)
+      throw Error("STEP export: OpenCASCADE could not translate the shape");
+    APIHeaderSection_MakeHeader header(writer.Model());
+    header.SetName(new TCollection_HAsciiString(o.product_name.c_str()));
+    header.SetOriginatingSystem(new TCollection_HAsciiString("tbs"));
+    header.SetAuthorisation(new TCollection_HAsciiString(""));
+    if (!o.description.empty()) header.SetDescriptionValue(1, new TCollection_HAsciiString(o.description.c_str()));
+    AtomicOutput out(path);
+    if (writer.Write(out.temp_path().c_str()) != IFSelect_RetDone)
+      throw IoError(path + ": OpenCASCADE could not write the STEP file");
+    out.commit();
+    b.report.seconds = seconds_since(t0);
+    return b.report;
+  } catch (const Standard_Failure& e) {
+    throw Error(std::string("STEP export: OpenCASCADE failed: ") + e.GetMessageString());
+  }
+}
+
+CadExportReport write_iges(const std::string& path, const TrianglePatchSet& ps, const CadExportOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const char* unit = occt_unit(o.units);
+  std::lock_guard lock(occt_mutex);
+  quiet_occt();
+  try {
+    Built b = build_shape(ps, o);
+    IGESControl_Controller::Init();
+    Interface_Static::SetCVal("xstep.cascade.unit", unit);
+    Interface_Static::SetCVal("write.iges.unit", unit);
+    Interface_Static::SetIVal("write.iges.brep.mode", 1);
+    IGESControl_Writer writer(unit, 1);
+    if (!writer.AddShape(b.shape)) throw Error("IGES export: OpenCASCADE could not translate the shape");
+    writer.ComputeModel();
+    // Global section: product, file name, sender; the description goes into the start
+    // section, in lines of at most 72 characters.
+    IGESData_GlobalSection& g = writer.Model()->ChangeGlobalSection();
+    g.SetSendName(new TCollection_HAsciiString(o.product_name.c_str()));
+    g.SetFileName(new TCollection_HAsciiString(std::filesystem::path(path).filename().c_str()));
+    g.SetSystemId(new TCollection_HAsciiString("tbs"));
+    g.SetAuthorName(new TCollection_HAsciiString("tbs"));
+    Handle(TColStd_HSequenceOfHAsciiString) start = new TColStd_HSequenceOfHAsciiString;
+    const std::string text = o.product_name + (o.description.empty() ? "" : ": " + o.description);
+    for (size_t i = 0; i < text.size(); i += 72)
+      start->Append(new TCollection_HAsciiString(text.substr(i, 72).c_str()));
+    writer.Model()->SetStartSection(start);
+    AtomicOutput out(path);
+    if (!writer.Write(out.temp_path().c_str())) throw IoError(path + ": OpenCASCADE could not write the IGES file");
+    out.commit();
+    b.report.seconds = seconds_since(t0);
+    return b.report;
+  } catch (const Standard_Failure& e) {
+    throw Error(std::string("IGES export: OpenCASCADE failed: ") + e.GetMessageString());
+  }
+}
+
+}  // namespace tbs
