@@ -41,4 +41,21 @@ struct FitCommandOptions {
 };
 int run_fit(const FitCommandOptions& o);
 
+struct ConvertOptions {
+  std::string input;
+  std::string output;
+  std::string format;        // empty: from the output's extension
+  bool exact = false;        // the exact Bezier pieces instead of compact patches
+  int patch_degree = 0;      // 0: spline degree + 2
+  double cad_tolerance = 1e-6;
+  double angle_tolerance = 1.0;
+  std::string schema = "ap214";
+  std::string triangle_patch = "quads";
+  std::string units;         // empty: the .tbs units (mm when unitless)
+  std::string product_name;  // empty: the output's file name without extension
+  int threads = 0;
+  bool quiet = false;
+};
+int run_convert(const ConvertOptions& o);
+
 }  // namespace tbs::cli

@@ -6,15 +6,24 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cctype>
 #include <cstdio>
+#include <string>
 #include <exception>
 #include <iostream>
+
+namespace {
+std::string lower_ascii(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace tbs::cli;
   CLI::App app{"tbs " TBS_VERSION ": triangular B-spline (DMS spline) surfaces from 3D scans, "
                "for CAD.\nThis version fits splines to scans whose points carry parameters (u, v), "
-               "inspects and evaluates .tbs splines; CAD export is not available yet.\n"
+               "inspects and evaluates .tbs splines, and converts them to STEP and IGES.\n"
                "Exit codes: 0 ok, 2 bad usage, 3 invalid input, 4 file I/O error, 5 internal error."};
   app.set_version_flag("--version", "tbs " TBS_VERSION);
   app.require_subcommand(1);
@@ -84,6 +93,46 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   fit_cmd->add_flag("--quiet,-q", fit.quiet, "No progress messages on stderr");
 
+  ConvertOptions convert;
+  auto* convert_cmd = app.add_subcommand(
+      "convert", "Convert a .tbs spline to a CAD file: STEP (.step, .stp; AP214, or AP242 with "
+                 "--schema) or IGES 5.3 (.iges, .igs), as exact B-spline faces sewn into one "
+                 "shell and checked by OpenCASCADE before writing. By default the surface is "
+                 "written as compact Bezier patches within --cad-tolerance of the spline; "
+                 "--exact writes its exact polynomial pieces instead. A summary goes to stdout.");
+  convert_cmd->add_option("input", convert.input, "The .tbs file")->required();
+  convert_cmd->add_option("output", convert.output, "The file to write (format from the extension)")->required();
+  convert_cmd->add_option("--format", convert.format, "Output format, overriding the extension: step, iges")
+      ->check(CLI::IsMember({"step", "stp", "iges", "igs"}, CLI::ignore_case));
+  convert_cmd->add_flag("--exact", convert.exact,
+                        "Write the exact piecewise Bezier form (many more faces) instead of compact patches");
+  convert_cmd->add_option("--patch-degree", convert.patch_degree,
+                          "Degree of the compact patches (default: spline degree + 2; at least the spline degree)")
+      ->check(CLI::Range(1, 15));
+  convert_cmd->add_option("--cad-tolerance", convert.cad_tolerance,
+                          "Largest distance between patches and spline, relative to the model size "
+                          "(the diagonal of the control points' bounding box)")
+      ->check(CLI::PositiveNumber)->capture_default_str();
+  convert_cmd->add_option("--angle-tolerance", convert.angle_tolerance,
+                          "Largest angle in degrees between the normals of patches meeting where the "
+                          "surface is smooth")
+      ->check(CLI::Range(0.001, 89.0))->capture_default_str();
+  convert_cmd->add_option("--schema", convert.schema, "STEP schema: ap214 or ap242")
+      ->check(CLI::IsMember({"ap214", "ap242"}, CLI::ignore_case))->capture_default_str();
+  convert_cmd->add_option("--triangle-patch", convert.triangle_patch,
+                          "How a triangular patch becomes B-spline faces: quads (three, none degenerate) "
+                          "or degenerate (one, with a collapsed edge)")
+      ->check(CLI::IsMember({"quads", "degenerate"}))->capture_default_str();
+  convert_cmd->add_option("--units", convert.units,
+                          "Length unit written to the file: mm, cm, m, um, in, ft (default: the .tbs "
+                          "units; mm if it has none). Coordinates are not scaled.")
+      ->check(CLI::IsMember({"mm", "cm", "m", "um", "in", "ft"}));
+  convert_cmd->add_option("--product-name", convert.product_name,
+                          "Product name in the file (default: the output's file name)");
+  convert_cmd->add_option("--threads,-t", convert.threads, "Worker threads (0 = all cores)")
+      ->check(CLI::NonNegativeNumber);
+  convert_cmd->add_flag("--quiet,-q", convert.quiet, "No progress messages on stderr");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -95,6 +144,10 @@ int main(int argc, char** argv) {
     if (*info_cmd) return run_info(info);
     if (*eval_cmd) return run_eval(eval);
     if (*fit_cmd) return run_fit(fit);
+    if (*convert_cmd) {
+      convert.schema = lower_ascii(convert.schema);
+      return run_convert(convert);
+    }
   } catch (const tbs::IoError& e) {
     std::fprintf(stderr, "tbs: error: %s\n", e.what());
     return kIo;

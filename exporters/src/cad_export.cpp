@@ -153,6 +153,8 @@ CadExportReport write_step(const std::string& path, const TrianglePatchSet& ps, 
     APIHeaderSection_MakeHeader header(writer.Model());
     header.SetName(new TCollection_HAsciiString(o.product_name.c_str()));
     header.SetOriginatingSystem(new TCollection_HAsciiString("tbs"));
+    header.SetAuthorValue(1, new TCollection_HAsciiString("tbs"));
+    header.SetOrganizationValue(1, new TCollection_HAsciiString(""));
     header.SetAuthorisation(new TCollection_HAsciiString(""));
     if (!o.description.empty()) header.SetDescriptionValue(1, new TCollection_HAsciiString(o.description.c_str()));
     AtomicOutput out(path);

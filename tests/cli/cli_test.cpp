@@ -255,3 +255,97 @@ TEST(CliFit, BadOptionsAndFiles) {
 
 }  // namespace
 }  // namespace tbs
+
+namespace tbs {
+namespace {
+
+// A small spline in mm with a crease and a hole, written where the tests can find it.
+fs::path small_spline() {
+  const fs::path p = temp_dir() / "small.tbs";
+  if (!fs::exists(p)) {
+    test::GridOptions o;
+    o.nx = o.ny = 4;
+    o.hole = true;
+    o.feature_column = 1;
+    Spline s = test::random_spline(3, o, 71);
+    for (int t = 0; t < s.domain().triangle_count(); ++t)
+      for (int i = 0; i < beta_count(3); ++i) {
+        const Point2 b = s.blossom_point(t, beta_at(3, i));
+        s.control_points()[s.control_point_index(t, i)] =
+            Point3(50 * b.x(), 50 * b.y(), 5 * std::sin(3 * b.x()) + 10 * std::fabs(b.x() - 0.25));
+      }
+    write_tbs(p.string(), SplineFile{s, "mm", R"({"source": "test", "fit": {"max_error": 0.001}})"});
+  }
+  return p;
+}
+
+TEST(CliConvert, WritesStepAndIgesWithASummary) {
+  const fs::path dir = temp_dir();
+  for (const std::string ext : {".step", ".igs"}) {
+    const fs::path out = dir / ("small" + ext);
+    const Result r = run("convert '" + small_spline().string() + "' '" + out.string() + "' --cad-tolerance 1e-4 -q");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_TRUE(fs::exists(out));
+    EXPECT_NE(r.out.find("1 shell,"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("units              mm"), std::string::npos) << r.out;
+    EXPECT_TRUE(r.err.empty()) << r.err;  // --quiet
+  }
+  // The header carries the product name and the fit's figures.
+  const std::string step = read_file((dir / "small.step").string());
+  EXPECT_NE(step.find("'small'"), std::string::npos);
+  EXPECT_NE(step.find("max error 0.001"), std::string::npos);
+}
+
+TEST(CliConvert, ExactAndOptions) {
+  const fs::path out = temp_dir() / "exact.stp";
+  const Result r = run("convert '" + small_spline().string() + "' '" + out.string() +
+                       "' --exact --schema AP242 --triangle-patch degenerate --units in --product-name Part7");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("exact Bezier pieces, degree 3"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("STEP AP242"), std::string::npos);
+  const std::string step = read_file(out.string());
+  EXPECT_NE(step.find("Part7"), std::string::npos);
+  EXPECT_NE(step.find("INCH"), std::string::npos);
+  EXPECT_NE(r.err.find("extracting"), std::string::npos);  // progress on stderr
+}
+
+TEST(CliConvert, BadRequestsFailCleanly) {
+  const fs::path dir = temp_dir();
+  const std::string in = small_spline().string();
+  // Unknown format: usage error, nothing written.
+  Result r = run("convert '" + in + "' '" + (dir / "x.dxf").string() + "'");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("x.dxf: unknown output format 'dxf'"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "x.dxf"));
+  // Missing input: I/O error.
+  r = run("convert '" + (dir / "none.tbs").string() + "' '" + (dir / "none.step").string() + "'");
+  EXPECT_EQ(r.code, 4);
+  EXPECT_FALSE(fs::exists(dir / "none.step"));
+  // A folder that does not exist: I/O error, nothing left behind.
+  r = run("convert '" + in + "' '" + (dir / "no" / "x.step").string() + "' --cad-tolerance 1e-3 -q");
+  EXPECT_EQ(r.code, 4) << r.err;
+  // A broken input keeps an existing output as it was.
+  const fs::path broken = dir / "broken.tbs", keep = dir / "keep.step";
+  std::ofstream(broken) << "{\"format\": \"tbs\"";
+  std::ofstream(keep) << "old";
+  r = run("convert '" + broken.string() + "' '" + keep.string() + "'");
+  EXPECT_EQ(r.code, 3);
+  EXPECT_EQ(read_file(keep.string()), "old");
+  // Out-of-range options are usage errors.
+  EXPECT_EQ(run("convert '" + in + "' '" + keep.string() + "' --patch-degree 99").code, 2);
+  EXPECT_EQ(run("convert '" + in + "' '" + keep.string() + "' --cad-tolerance -1").code, 2);
+  EXPECT_EQ(run("convert '" + in + "' '" + keep.string() + "' --units furlong").code, 2);
+  // A patch degree below the spline's: invalid input.
+  r = run("convert '" + in + "' '" + keep.string() + "' --patch-degree 2");
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("patch degree 2 is out of range"), std::string::npos) << r.err;
+  EXPECT_EQ(read_file(keep.string()), "old");
+  // The input itself as output.
+  EXPECT_EQ(run("convert '" + in + "' '" + in + "' --format step").code, 3);
+  // No temporary files left in the folder.
+  for (const auto& e : fs::directory_iterator(dir))
+    EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
+}
+
+}  // namespace
+}  // namespace tbs

@@ -1,0 +1,144 @@
+// `tbs convert`: a .tbs spline to CAD files.
+
+#include "commands.h"
+
+#include <tbs/cad_export.h>
+#include <tbs/cad_patches.h>
+#include <tbs/errors.h>
+#include <tbs/extract.h>
+#include <tbs/io.h>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+
+namespace tbs::cli {
+
+namespace {
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+// The format named by --format or by the output's extension.
+std::string output_format(const ConvertOptions& o) {
+  static const std::vector<std::pair<std::string, std::string>> known = {
+      {"step", "step"}, {"stp", "step"}, {"iges", "iges"}, {"igs", "iges"}};
+  std::string f = lower(o.format);
+  if (f.empty()) {
+    f = lower(std::filesystem::path(o.output).extension().string());
+    if (!f.empty() && f[0] == '.') f.erase(0, 1);
+  }
+  for (const auto& [name, format] : known)
+    if (f == name) return format;
+  throw InvalidInput(o.output + ": unknown output format '" + f +
+                     "': use an extension .step, .stp, .iges or .igs, or --format step|iges");
+}
+
+// A short description for the file header: the fit's key figures from the .tbs metadata,
+// in plain ASCII without quotes (STEP and IGES strings).
+std::string describe(const SplineFile& f) {
+  std::string text = "tbs " TBS_VERSION " DMS spline, degree " + std::to_string(f.spline.degree()) + ", " +
+                     std::to_string(f.spline.domain().triangle_count()) + " domain triangles";
+  try {
+    const auto meta = nlohmann::json::parse(f.metadata_json);
+    if (meta.contains("source")) text += ", fitted to " + meta["source"].get<std::string>();
+    if (meta.contains("fit")) {
+      const auto& fit = meta["fit"];
+      char buf[160];
+      std::snprintf(buf, sizeof buf, ", max error %.3g, RMS error %.3g (relative), tolerance %.3g",
+                    fit.value("max_error", 0.0), fit.value("rms_error", 0.0), fit.value("tolerance", 0.0));
+      text += buf;
+    }
+  } catch (const std::exception&) {
+    // Metadata is free text for other producers: leave it out.
+  }
+  std::string clean;
+  for (char c : text)
+    if (c >= 32 && c < 127 && c != '\'' && c != '"') clean += c;
+  return clean;
+}
+
+}  // namespace
+
+int run_convert(const ConvertOptions& o) {
+  namespace fs = std::filesystem;
+  const auto t0 = std::chrono::steady_clock::now();
+  std::error_code ec;
+  if (fs::exists(o.output, ec) && fs::equivalent(o.input, o.output, ec))
+    throw InvalidInput(o.output + ": the output would overwrite the input; choose another path");
+  std::string format;
+  try {
+    format = output_format(o);
+  } catch (const InvalidInput& e) {
+    // A file name tbs cannot write is a usage error, like an unknown option.
+    std::fprintf(stderr, "tbs: error: %s\n", e.what());
+    return kUsage;
+  }
+  auto say = [&](const std::string& line) {
+    if (!o.quiet) std::fprintf(stderr, "tbs convert: %s\n", line.c_str());
+  };
+  const SplineFile file = read_tbs(o.input);
+  const Spline& s = file.spline;
+
+  CadExportOptions eo;
+  eo.units = o.units.empty() ? (file.units == "unitless" ? "mm" : file.units) : o.units;
+  if (o.units.empty() && file.units == "unitless")
+    say("the spline has no unit; writing it as millimetres (use --units to choose)");
+  eo.product_name = o.product_name.empty() ? fs::path(o.output).stem().string() : o.product_name;
+  eo.description = describe(file);
+  eo.schema = o.schema == "ap242" ? StepSchema::AP242 : StepSchema::AP214;
+  eo.faces = o.triangle_patch == "degenerate" ? TriangleFaces::Collapsed : TriangleFaces::Quads;
+
+  TrianglePatchSet patches;
+  std::string kind;
+  double deviation = 0, normal_deviation = 0, tolerance = 0;
+  bool within = true;
+  if (o.exact) {
+    say("extracting the exact Bezier pieces");
+    const Extraction x = extract_bezier(s, {.threads = o.threads});
+    patches = patch_set(x);
+    kind = "exact Bezier pieces, degree " + std::to_string(x.degree);
+  } else {
+    say("building compact CAD patches");
+    CadPatchOptions co;
+    co.degree = o.patch_degree;
+    co.tolerance = o.cad_tolerance;
+    co.angle_tolerance = o.angle_tolerance;
+    co.threads = o.threads;
+    const CadPatches c = make_cad_patches(s, co);
+    patches = patch_set(c);
+    kind = "compact patches, degree " + std::to_string(c.degree);
+    deviation = c.max_position_deviation;
+    normal_deviation = c.max_normal_deviation;
+    tolerance = c.tolerance;
+    within = c.within_tolerance;
+    if (!within)
+      say("warning: the patches are not within the CAD tolerance everywhere (deepest split "
+          "reached); see 'max deviation' below, or use --exact");
+  }
+  say("writing " + std::to_string(patches.size()) + " patches to " + o.output);
+  const CadExportReport r = format == "step" ? write_step(o.output, patches, eo) : write_iges(o.output, patches, eo);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  std::printf("%-18s %s\n", "input", o.input.c_str());
+  std::printf("%-18s %s (%s)\n", "output", o.output.c_str(), format == "step" ? (o.schema == "ap242" ? "STEP AP242" : "STEP AP214") : "IGES 5.3");
+  std::printf("%-18s %zu %s\n", "patches", patches.size(), kind.c_str());
+  std::printf("%-18s %zu B-spline faces, %zu shell%s, %zu free edges\n", "shape", r.faces, r.shells,
+              r.shells == 1 ? "" : "s", r.free_edges);
+  if (!o.exact) {
+    std::printf("%-18s %.3g %s (tolerance %.3g)%s\n", "max deviation", deviation, eo.units.c_str(), tolerance,
+                within ? "" : "  NOT WITHIN TOLERANCE");
+    std::printf("%-18s %.3g degrees\n", "max normal dev.", normal_deviation);
+  }
+  std::printf("%-18s %s\n", "units", eo.units.c_str());
+  std::printf("%-18s %.2f s\n", "time", seconds);
+  return kOk;
+}
+
+}  // namespace tbs::cli
