@@ -2,7 +2,7 @@
 # Installs what is missing, builds tbs (Release) and runs the main job on the bundled sample:
 # fits one triangular B-spline to the scan samples/bracket.ply (a folded sheet with a 60 degree
 # crease and a hole, 40,933 points with parameters), prints the report table, checks the result
-# with `tbs info` and samples the surface across the crease.
+# with `tbs info`, samples the surface across the crease, and writes it as STEP and IGES.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/deps.sh
@@ -38,4 +38,9 @@ paste -d' ' "$out/crease.uv" "$out/crease.xyz" | awk '
     if (NR % 2 == 1) { x = $6; y = $7; z = $8 }
     else { d = x * $6 + y * $7 + z * $8; printf "  normal turns by %.1f degrees\n", atan2(sqrt(1 - d * d), d) * 57.29578 } }'
 echo
-echo "Outputs in $out: bracket.tbs (the spline), report.json (fit report), info.json"
+echo "== tbs convert $out/bracket.tbs $out/bracket.step (and .igs): CAD files through OpenCASCADE"
+"$tbs" convert "$out/bracket.tbs" "$out/bracket.step" --quiet
+"$tbs" convert "$out/bracket.tbs" "$out/bracket.igs" --quiet | tail -n +2 | head -2
+echo
+echo "Outputs in $out: bracket.tbs (the spline), report.json (fit report), info.json,"
+echo "bracket.step and bracket.igs (the surface as B-spline faces in one shell)"

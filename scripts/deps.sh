@@ -8,7 +8,8 @@ TBS_PACKAGES=(
   libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
   libocct-data-exchange-dev libocct-ocaf-dev libocct-visualization-dev
 )
-TBS_TEST_PACKAGES=(libgtest-dev libgmock-dev libbenchmark-dev python3 python3-jsonschema libcgal-demo)
+TBS_TEST_PACKAGES=(libgtest-dev libgmock-dev libbenchmark-dev python3 python3-jsonschema libcgal-demo
+  freecad-python3)
 
 tbs_install_deps() {
   local wanted=("${TBS_PACKAGES[@]}" "$@") missing=() p

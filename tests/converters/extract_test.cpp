@@ -189,7 +189,7 @@ namespace tbs {
 namespace {
 
 TEST(Bezier, QuadsAndCollapsedQuadEqualTheTriangle) {
-  for (int m : {1, 3, 5, 7}) {
+  for (int m : {1, 2, 3, 4, 5, 7}) {
     std::vector<Point3> net(beta_count(m));
     for (size_t i = 0; i < net.size(); ++i) net[i] = Point3(std::sin(1.3 * i), std::cos(0.7 * i), 0.1 * i * i);
     const auto quads = bezier_triangle_to_quads(net, m);
