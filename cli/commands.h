@@ -53,6 +53,8 @@ struct ConvertOptions {
   std::string triangle_patch = "quads";
   std::string units;         // empty: the .tbs units (mm when unitless)
   std::string product_name;  // empty: the output's file name without extension
+  int resolution = 0;        // meshes: uniform resolution; 0 = adaptive
+  double chordal_tolerance = 1e-4;
   int threads = 0;
   bool quiet = false;
 };

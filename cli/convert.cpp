@@ -7,6 +7,8 @@
 #include <tbs/errors.h>
 #include <tbs/extract.h>
 #include <tbs/io.h>
+#include <tbs/mesh_export.h>
+#include <tbs/tessellate.h>
 
 #include <nlohmann/json.hpp>
 
@@ -28,7 +30,7 @@ std::string lower(std::string s) {
 // The format named by --format or by the output's extension.
 std::string output_format(const ConvertOptions& o) {
   static const std::vector<std::pair<std::string, std::string>> known = {
-      {"step", "step"}, {"stp", "step"}, {"iges", "iges"}, {"igs", "iges"}};
+      {"step", "step"}, {"stp", "step"}, {"iges", "iges"}, {"igs", "iges"}, {"glb", "glb"}, {"gltf", "gltf"}};
   std::string f = lower(o.format);
   if (f.empty()) {
     f = lower(std::filesystem::path(o.output).extension().string());
@@ -37,7 +39,7 @@ std::string output_format(const ConvertOptions& o) {
   for (const auto& [name, format] : known)
     if (f == name) return format;
   throw InvalidInput(o.output + ": unknown output format '" + f +
-                     "': use an extension .step, .stp, .iges or .igs, or --format step|iges");
+                     "': use an extension .step, .stp, .iges, .igs, .glb or .gltf, or --format");
 }
 
 // A short description for the file header: the fit's key figures from the .tbs metadata,
@@ -85,6 +87,31 @@ int run_convert(const ConvertOptions& o) {
   };
   const SplineFile file = read_tbs(o.input);
   const Spline& s = file.spline;
+
+  if (format == "glb" || format == "gltf") {
+    TessellateOptions to;
+    to.threads = o.threads;
+    if (o.resolution > 0) {
+      to.resolution = o.resolution;
+    } else {
+      to.chordal_tolerance = o.chordal_tolerance;
+    }
+    say("tessellating");
+    const Mesh mesh = tessellate(s, to);
+    GltfOptions go;
+    go.generator = "tbs " TBS_VERSION;
+    go.name = o.product_name.empty() ? fs::path(o.output).stem().string() : o.product_name;
+    say("writing " + std::to_string(mesh.faces.size()) + " triangles to " + o.output);
+    const MeshExportReport r = write_gltf(o.output, mesh, s.domain().bounding_box(), go);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::printf("%-18s %s\n", "input", o.input.c_str());
+    std::printf("%-18s %s (glTF 2.0%s)\n", "output", o.output.c_str(), format == "glb" ? ", binary" : "");
+    std::printf("%-18s %zu triangles, %zu vertices\n", "mesh", r.faces, r.vertices);
+    std::printf("%-18s %.3g %s%s\n", "max chordal dev.", mesh.max_chordal_deviation,
+                file.units.c_str(), o.resolution > 0 ? "" : " (adaptive)");
+    std::printf("%-18s %.2f s\n", "time", seconds);
+    return kOk;
+  }
 
   CadExportOptions eo;
   eo.units = o.units.empty() ? (file.units == "unitless" ? "mm" : file.units) : o.units;

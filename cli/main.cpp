@@ -23,7 +23,7 @@ int main(int argc, char** argv) {
   using namespace tbs::cli;
   CLI::App app{"tbs " TBS_VERSION ": triangular B-spline (DMS spline) surfaces from 3D scans, "
                "for CAD.\nThis version fits splines to scans whose points carry parameters (u, v), "
-               "inspects and evaluates .tbs splines, and converts them to STEP and IGES.\n"
+               "inspects and evaluates .tbs splines, and converts them to STEP, IGES and glTF.\n"
                "Exit codes: 0 ok, 2 bad usage, 3 invalid input, 4 file I/O error, 5 internal error."};
   app.set_version_flag("--version", "tbs " TBS_VERSION);
   app.require_subcommand(1);
@@ -99,11 +99,20 @@ int main(int argc, char** argv) {
                  "--schema) or IGES 5.3 (.iges, .igs), as exact B-spline faces sewn into one "
                  "shell and checked by OpenCASCADE before writing. By default the surface is "
                  "written as compact Bezier patches within --cad-tolerance of the spline; "
-                 "--exact writes its exact polynomial pieces instead. A summary goes to stdout.");
+                 "--exact writes its exact polynomial pieces instead. Or a glTF 2.0 mesh (.glb, "
+                 ".gltf) with normals, (u, v) and domain-triangle ids. A summary goes to stdout.");
   convert_cmd->add_option("input", convert.input, "The .tbs file")->required();
   convert_cmd->add_option("output", convert.output, "The file to write (format from the extension)")->required();
-  convert_cmd->add_option("--format", convert.format, "Output format, overriding the extension: step, iges")
-      ->check(CLI::IsMember({"step", "stp", "iges", "igs"}, CLI::ignore_case));
+  convert_cmd->add_option("--format", convert.format, "Output format, overriding the extension: step, iges, glb, gltf")
+      ->check(CLI::IsMember({"step", "stp", "iges", "igs", "glb", "gltf"}, CLI::ignore_case));
+  convert_cmd->add_option("--resolution", convert.resolution,
+                          "Meshes (glb, gltf): cut every domain edge into this many segments "
+                          "(default: adaptive to --chordal-tolerance)")
+      ->check(CLI::Range(1, 4096));
+  convert_cmd->add_option("--chordal-tolerance", convert.chordal_tolerance,
+                          "Meshes: largest distance between triangles and surface, relative to the "
+                          "model size")
+      ->check(CLI::PositiveNumber)->capture_default_str();
   convert_cmd->add_flag("--exact", convert.exact,
                         "Write the exact piecewise Bezier form (many more faces) instead of compact patches");
   convert_cmd->add_option("--patch-degree", convert.patch_degree,

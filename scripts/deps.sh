@@ -7,6 +7,7 @@ TBS_PACKAGES=(
   libtbb-dev nlohmann-json3-dev libcli11-dev libsuitesparse-dev libtinyobjloader-dev
   libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
   libocct-data-exchange-dev libocct-ocaf-dev libocct-visualization-dev
+  libtinygltf-dev libstb-dev
 )
 TBS_TEST_PACKAGES=(libgtest-dev libgmock-dev libbenchmark-dev python3 python3-jsonschema libcgal-demo
   freecad-python3)
@@ -39,4 +40,18 @@ tbs_build() {
   else
     cmake --build "$root/build" --parallel "$jobs" --target "$@"
   fi
+}
+
+# The Khronos glTF validator (npm gltf-validator), for the tests: installed once into
+# build/npm (needs npm; Debian's npm package is installed if npm is missing).
+tbs_install_gltf_validator() {
+  local root dir
+  root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+  dir="$root/build/npm"
+  [ -f "$dir/node_modules/gltf-validator/package.json" ] && return 0
+  if ! command -v npm >/dev/null 2>&1; then
+    tbs_install_deps npm
+  fi
+  mkdir -p "$dir"
+  (cd "$dir" && npm install --no-audit --no-fund --loglevel=error gltf-validator@2.0.0-dev.3.10 >/dev/null)
 }

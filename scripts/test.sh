@@ -5,5 +5,6 @@ cd "$(dirname "$0")/.."
 source scripts/deps.sh
 tbs_install_deps "${TBS_TEST_PACKAGES[@]}"
 tbs_build
+tbs_install_gltf_validator
 cd build
 ctest --output-on-failure --parallel "$(nproc 2>/dev/null || echo 2)" --timeout 900

@@ -296,6 +296,19 @@ TEST(CliConvert, WritesStepAndIgesWithASummary) {
   EXPECT_NE(step.find("max error 0.001"), std::string::npos);
 }
 
+TEST(CliConvert, WritesGltfMeshes) {
+  const fs::path dir = temp_dir();
+  Result r = run("convert '" + small_spline().string() + "' '" + (dir / "m.glb").string() + "' --chordal-tolerance 1e-3 -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("glTF 2.0, binary"), std::string::npos) << r.out;
+  EXPECT_EQ(read_file((dir / "m.glb").string()).substr(0, 4), "glTF");  // the GLB magic
+  r = run("convert '" + small_spline().string() + "' '" + (dir / "m.gltf").string() + "' --resolution 2 -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  // 2 x 2 faces per domain triangle.
+  const int triangles = read_tbs(small_spline().string()).spline.domain().triangle_count();
+  EXPECT_NE(r.out.find(std::to_string(4 * triangles) + " triangles"), std::string::npos) << r.out;
+}
+
 TEST(CliConvert, ExactAndOptions) {
   const fs::path out = temp_dir() / "exact.stp";
   const Result r = run("convert '" + small_spline().string() + "' '" + out.string() +
