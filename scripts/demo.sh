@@ -2,7 +2,7 @@
 # Installs what is missing, builds tbs (Release) and runs the main job on the bundled sample:
 # fits one triangular B-spline to the scan samples/bracket.ply (a folded sheet with a 60 degree
 # crease and a hole, 40,933 points with parameters), prints the report table, checks the result
-# with `tbs info`, samples the surface across the crease, and writes it as STEP and IGES.
+# with `tbs info`, samples the surface across the crease, and writes it as STEP, IGES and glTF.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/deps.sh
@@ -42,5 +42,8 @@ echo "== tbs convert $out/bracket.tbs $out/bracket.step (and .igs): CAD files th
 "$tbs" convert "$out/bracket.tbs" "$out/bracket.step" --quiet
 "$tbs" convert "$out/bracket.tbs" "$out/bracket.igs" --quiet | tail -n +2 | head -2
 echo
+echo "== tbs convert $out/bracket.tbs $out/bracket.glb: a glTF mesh for viewers"
+"$tbs" convert "$out/bracket.tbs" "$out/bracket.glb" --quiet
+echo
 echo "Outputs in $out: bracket.tbs (the spline), report.json (fit report), info.json,"
-echo "bracket.step and bracket.igs (the surface as B-spline faces in one shell)"
+echo "bracket.step and bracket.igs (the surface as B-spline faces in one shell), bracket.glb (mesh)"
