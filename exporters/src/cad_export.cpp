@@ -133,22 +133,44 @@ void quiet_occt() {
 
 }  // namespace
 
-CadExportReport write_step(const std::string& path, const TrianglePatchSet& ps, const CadExportOptions& o) {
+namespace {
+
+// The steps every CAD writer shares: check the unit, take OCCT's process-wide settings for
+// this call, build and check the shape, let `write` translate it into the temporary file of
+// an AtomicOutput, commit, and turn OCCT's exceptions into ours.
+template <class Write>
+CadExportReport export_shape(const char* format, const std::string& path, const TrianglePatchSet& ps,
+                             const CadExportOptions& o, Write&& write) {
   const auto t0 = std::chrono::steady_clock::now();
   const char* unit = occt_unit(o.units);
   std::lock_guard lock(occt_mutex);
   quiet_occt();
   try {
     Built b = build_shape(ps, o);
-    STEPControl_Controller::Init();
-    // The coordinates are already in `unit`: tell OCCT its session unit is the same, so it
+    // The coordinates are already in `unit`: OCCT's session unit is set to the same, so it
     // writes them unscaled.
+    Interface_Static::SetCVal("xstep.cascade.unit", unit);
+    AtomicOutput out(path);
+    write(b.shape, unit, out.temp_path());
+    out.commit();
+    b.report.seconds = seconds_since(t0);
+    return b.report;
+  } catch (const Standard_Failure& e) {
+    throw Error(std::string(format) + " export: OpenCASCADE failed: " + e.GetMessageString());
+  }
+}
+
+}  // namespace
+
+CadExportReport write_step(const std::string& path, const TrianglePatchSet& ps, const CadExportOptions& o) {
+  return export_shape("STEP", path, ps, o, [&](const TopoDS_Shape& shape, const char* unit, const std::string& temp) {
+    STEPControl_Controller::Init();
     Interface_Static::SetCVal("xstep.cascade.unit", unit);
     Interface_Static::SetCVal("write.step.unit", unit);
     Interface_Static::SetCVal("write.step.schema", o.schema == StepSchema::AP242 ? "AP242DIS" : "AP214IS");
     Interface_Static::SetCVal("write.step.product.name", o.product_name.c_str());
     STEPControl_Writer writer;
-    if (writer.Transfer(b.shape, STEPControl_AsIs) != IFSelect_RetDone)
+    if (writer.Transfer(shape, STEPControl_AsIs) != IFSelect_RetDone)
       throw Error("STEP export: OpenCASCADE could not translate the shape");
     APIHeaderSection_MakeHeader header(writer.Model());
     header.SetName(new TCollection_HAsciiString(o.product_name.c_str()));
@@ -157,30 +179,19 @@ CadExportReport write_step(const std::string& path, const TrianglePatchSet& ps, 
     header.SetOrganizationValue(1, new TCollection_HAsciiString(""));
     header.SetAuthorisation(new TCollection_HAsciiString(""));
     if (!o.description.empty()) header.SetDescriptionValue(1, new TCollection_HAsciiString(o.description.c_str()));
-    AtomicOutput out(path);
-    if (writer.Write(out.temp_path().c_str()) != IFSelect_RetDone)
+    if (writer.Write(temp.c_str()) != IFSelect_RetDone)
       throw IoError(path + ": OpenCASCADE could not write the STEP file");
-    out.commit();
-    b.report.seconds = seconds_since(t0);
-    return b.report;
-  } catch (const Standard_Failure& e) {
-    throw Error(std::string("STEP export: OpenCASCADE failed: ") + e.GetMessageString());
-  }
+  });
 }
 
 CadExportReport write_iges(const std::string& path, const TrianglePatchSet& ps, const CadExportOptions& o) {
-  const auto t0 = std::chrono::steady_clock::now();
-  const char* unit = occt_unit(o.units);
-  std::lock_guard lock(occt_mutex);
-  quiet_occt();
-  try {
-    Built b = build_shape(ps, o);
+  return export_shape("IGES", path, ps, o, [&](const TopoDS_Shape& shape, const char* unit, const std::string& temp) {
     IGESControl_Controller::Init();
     Interface_Static::SetCVal("xstep.cascade.unit", unit);
     Interface_Static::SetCVal("write.iges.unit", unit);
     Interface_Static::SetIVal("write.iges.brep.mode", 1);
     IGESControl_Writer writer(unit, 1);
-    if (!writer.AddShape(b.shape)) throw Error("IGES export: OpenCASCADE could not translate the shape");
+    if (!writer.AddShape(shape)) throw Error("IGES export: OpenCASCADE could not translate the shape");
     writer.ComputeModel();
     // Global section: product, file name, sender; the description goes into the start
     // section, in lines of at most 72 characters.
@@ -194,14 +205,8 @@ CadExportReport write_iges(const std::string& path, const TrianglePatchSet& ps, 
     for (size_t i = 0; i < text.size(); i += 72)
       start->Append(new TCollection_HAsciiString(text.substr(i, 72).c_str()));
     writer.Model()->SetStartSection(start);
-    AtomicOutput out(path);
-    if (!writer.Write(out.temp_path().c_str())) throw IoError(path + ": OpenCASCADE could not write the IGES file");
-    out.commit();
-    b.report.seconds = seconds_since(t0);
-    return b.report;
-  } catch (const Standard_Failure& e) {
-    throw Error(std::string("IGES export: OpenCASCADE failed: ") + e.GetMessageString());
-  }
+    if (!writer.Write(temp.c_str())) throw IoError(path + ": OpenCASCADE could not write the IGES file");
+  });
 }
 
 }  // namespace tbs
