@@ -7,7 +7,7 @@ TBS_PACKAGES=(
   libtbb-dev nlohmann-json3-dev libcli11-dev libsuitesparse-dev libtinyobjloader-dev
   libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
   libocct-data-exchange-dev libocct-ocaf-dev libocct-visualization-dev
-  libtinygltf-dev libstb-dev
+  libtinygltf-dev libstb-dev libopenexr-dev
 )
 TBS_TEST_PACKAGES=(libgtest-dev libgmock-dev libbenchmark-dev python3 python3-jsonschema libcgal-demo
   freecad-python3)
