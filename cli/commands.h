@@ -53,6 +53,9 @@ struct ConvertOptions {
   std::string triangle_patch = "quads";
   std::string units;         // empty: the .tbs units (mm when unitless)
   std::string product_name;  // empty: the output's file name without extension
+  std::string points;        // error maps: the scan with parameters
+  int width = 512;           // error maps: pixels across u
+  std::string measure = "parameter";
   int resolution = 0;        // meshes: uniform resolution; 0 = adaptive
   double chordal_tolerance = 1e-4;
   int threads = 0;

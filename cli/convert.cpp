@@ -6,7 +6,10 @@
 #include <tbs/cad_patches.h>
 #include <tbs/errors.h>
 #include <tbs/extract.h>
+#include <tbs/error_map.h>
+#include <tbs/image_export.h>
 #include <tbs/io.h>
+#include <tbs/scan.h>
 #include <tbs/mesh_export.h>
 #include <tbs/tessellate.h>
 
@@ -30,7 +33,7 @@ std::string lower(std::string s) {
 // The format named by --format or by the output's extension.
 std::string output_format(const ConvertOptions& o) {
   static const std::vector<std::pair<std::string, std::string>> known = {
-      {"step", "step"}, {"stp", "step"}, {"iges", "iges"}, {"igs", "iges"}, {"glb", "glb"}, {"gltf", "gltf"}};
+      {"step", "step"}, {"stp", "step"}, {"iges", "iges"}, {"igs", "iges"}, {"glb", "glb"}, {"gltf", "gltf"}, {"exr", "exr"}};
   std::string f = lower(o.format);
   if (f.empty()) {
     f = lower(std::filesystem::path(o.output).extension().string());
@@ -39,7 +42,7 @@ std::string output_format(const ConvertOptions& o) {
   for (const auto& [name, format] : known)
     if (f == name) return format;
   throw InvalidInput(o.output + ": unknown output format '" + f +
-                     "': use an extension .step, .stp, .iges, .igs, .glb or .gltf, or --format");
+                     "': use an extension .step, .stp, .iges, .igs, .glb, .gltf or .exr, or --format");
 }
 
 // A short description for the file header: the fit's key figures from the .tbs metadata,
@@ -87,6 +90,46 @@ int run_convert(const ConvertOptions& o) {
   };
   const SplineFile file = read_tbs(o.input);
   const Spline& s = file.spline;
+
+  if (format == "exr") {
+    if (o.points.empty())
+      throw InvalidInput(o.output + ": an error map needs the scanned points: add --points SCAN (the scan "
+                         "the spline was fitted to, with its parameters u v)");
+    say("reading " + o.points);
+    const Scan scan = read_scan(o.points);
+    if (scan.uv.empty())
+      throw InvalidInput(o.points + ": these points have no parameters (u, v); an error map needs the "
+                         "scan the spline was fitted to");
+    const ErrorMeasure measure = o.measure == "closest" ? ErrorMeasure::Closest : ErrorMeasure::Parameter;
+    say("measuring " + std::to_string(scan.positions.size()) + " points");
+    const PointErrors e = point_errors(s, scan.positions, scan.uv, {.measure = measure, .threads = o.threads});
+    const ErrorMap map = make_error_map(s, measure == ErrorMeasure::Closest ? std::span<const Point2>(e.foot)
+                                                                           : std::span<const Point2>(scan.uv),
+                                       e, {.width = o.width, .threads = o.threads});
+    double tolerance = 0;
+    try {
+      const auto meta = nlohmann::json::parse(file.metadata_json);
+      if (meta.contains("fit")) tolerance = meta["fit"].value("tolerance_abs", 0.0);
+    } catch (const std::exception&) {
+    }
+    const std::string png = (fs::path(o.output).parent_path() / fs::path(o.output).stem()).string() + ".png";
+    write_error_exr(o.output, map, measure, {.units = file.units, .tolerance = tolerance});
+    write_error_png(png, map, tolerance > 0 ? std::max(tolerance, e.stats.max) : 0.0);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const char* u = file.units.c_str();
+    std::printf("%-18s %s\n", "input", o.input.c_str());
+    std::printf("%-18s %s (OpenEXR, %d x %d) and %s (preview)\n", "output", o.output.c_str(), map.width,
+                map.height, png.c_str());
+    std::printf("%-18s %zu (%zu outside the domain)\n", "points", e.stats.count, e.outside);
+    std::printf("%-18s %s\n", "measure", measure == ErrorMeasure::Closest ? "closest surface point" : "at the point's parameter");
+    std::printf("%-18s %.4g %s\n", "max error", e.stats.max, u);
+    std::printf("%-18s %.4g %s\n", "RMS error", e.stats.rms, u);
+    std::printf("%-18s %.4g / %.4g / %.4g %s\n", "p50 / p95 / p99", e.stats.p50, e.stats.p95, e.stats.p99, u);
+    std::printf("%-18s %.4g .. %.4g %s\n", "signed range", e.stats.min_signed, e.stats.max_signed, u);
+    std::printf("%-18s 0 (blue) .. %.4g %s (red)\n", "PNG colour scale", tolerance > 0 ? std::max(tolerance, e.stats.max) : e.stats.max, u);
+    std::printf("%-18s %.2f s\n", "time", seconds);
+    return kOk;
+  }
 
   if (format == "glb" || format == "gltf") {
     TessellateOptions to;

@@ -2,7 +2,8 @@
 # Installs what is missing, builds tbs (Release) and runs the main job on the bundled sample:
 # fits one triangular B-spline to the scan samples/bracket.ply (a folded sheet with a 60 degree
 # crease and a hole, 40,933 points with parameters), prints the report table, checks the result
-# with `tbs info`, samples the surface across the crease, and writes it as STEP, IGES and glTF.
+# with `tbs info`, samples the surface across the crease, writes it as STEP, IGES and glTF,
+# and writes the error map of the scan as OpenEXR with a PNG preview.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/deps.sh
@@ -45,5 +46,9 @@ echo
 echo "== tbs convert $out/bracket.tbs $out/bracket.glb: a glTF mesh for viewers"
 "$tbs" convert "$out/bracket.tbs" "$out/bracket.glb" --quiet
 echo
+echo "== tbs convert $out/bracket.tbs $out/bracket.exr --points $scan: the error map (+ .png preview)"
+"$tbs" convert "$out/bracket.tbs" "$out/bracket.exr" --points "$scan" --quiet
+echo
 echo "Outputs in $out: bracket.tbs (the spline), report.json (fit report), info.json,"
-echo "bracket.step and bracket.igs (the surface as B-spline faces in one shell), bracket.glb (mesh)"
+echo "bracket.step and bracket.igs (the surface as B-spline faces in one shell), bracket.glb (mesh),"
+echo "bracket.exr (error map and geometry image) and bracket.png (its preview)"

@@ -309,6 +309,30 @@ TEST(CliConvert, WritesGltfMeshes) {
   EXPECT_NE(r.out.find(std::to_string(4 * triangles) + " triangles"), std::string::npos) << r.out;
 }
 
+TEST(CliConvert, ErrorMapOfTheFittedScan) {
+  const fs::path dir = temp_dir();
+  const std::string scan = std::string(TBS_SOURCE_DIR) + "/samples/bracket.ply";
+  const fs::path spline = dir / "bracket.tbs";
+  Result r = run("fit '" + scan + "' -o '" + spline.string() + "' --units mm -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json meta = json::parse(read_tbs(spline.string()).metadata_json);
+  r = run("convert '" + spline.string() + "' '" + (dir / "err.exr").string() + "' --points '" + scan + "' --width 64 -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir / "err.exr"));
+  EXPECT_TRUE(fs::exists(dir / "err.png"));
+  EXPECT_NE(r.out.find("64 x 64"), std::string::npos) << r.out;
+  // The map's maximum is the fit report's maximum error.
+  char expected[64];
+  std::snprintf(expected, sizeof expected, "%.4g mm", meta["fit"]["max_error_abs"].get<double>());
+  EXPECT_NE(r.out.find(std::string("max error          ") + expected), std::string::npos) << r.out << expected;
+  // Without the points: a clear refusal, nothing written.
+  r = run("convert '" + spline.string() + "' '" + (dir / "none.exr").string() + "'");
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("add --points SCAN"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "none.exr"));
+  EXPECT_FALSE(fs::exists(dir / "none.png"));
+}
+
 TEST(CliConvert, ExactAndOptions) {
   const fs::path out = temp_dir() / "exact.stp";
   const Result r = run("convert '" + small_spline().string() + "' '" + out.string() +

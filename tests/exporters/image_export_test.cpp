@@ -15,6 +15,7 @@
 #include <ImfIntAttribute.h>
 #include <ImfStringAttribute.h>
 #include <gtest/gtest.h>
+#include <stb_image.h>
 
 #include <filesystem>
 
@@ -75,6 +76,41 @@ TEST(Exr, ReadsBackWithTheChannelsAttributesAndValuesWritten) {
     outside += m.mask[i] == PixelKind::Outside;
   }
   EXPECT_GT(outside, 0);  // the hole
+}
+
+TEST(Png, PreviewDecodesWithTheMapsSizeAndTransparentOutside) {
+  test::GridOptions o;
+  o.nx = o.ny = 6;
+  o.hole = true;
+  const Spline s = test::random_spline(3, o, 93);
+  const auto uv = test::random_domain_points(s.domain(), 2000, 6);
+  const Evaluator ev(s);
+  std::vector<Point3> pts;
+  for (const auto& u : uv) pts.push_back(ev.value(u) + 1e-3 * ev.normal(u));
+  const PointErrors e = point_errors(s, pts, uv);
+  const ErrorMap m = make_error_map(s, uv, e, {.width = 40, .height = 30});
+  const fs::path file = fs::temp_directory_path() / ("tbs_png_test_" + std::to_string(::getpid()) + ".png");
+  write_error_png(file, m);
+  int w = 0, h = 0, c = 0;
+  unsigned char* img = stbi_load(file.c_str(), &w, &h, &c, 4);
+  fs::remove(file);
+  ASSERT_NE(img, nullptr);
+  EXPECT_EQ(w, 40);
+  EXPECT_EQ(h, 30 + 12);  // the map and the colour bar
+  int transparent = 0, opaque = 0;
+  for (size_t i = 0; i < m.mask.size(); ++i) {
+    const unsigned char alpha = img[4 * i + 3];
+    if (m.mask[i] == PixelKind::Outside) {
+      EXPECT_EQ(alpha, 0);
+      ++transparent;
+    } else {
+      EXPECT_EQ(alpha, 255);
+      ++opaque;
+    }
+  }
+  stbi_image_free(img);
+  EXPECT_GT(transparent, 0);
+  EXPECT_GT(opaque, 0);
 }
 
 TEST(Exr, AFailedWriteLeavesNothing) {

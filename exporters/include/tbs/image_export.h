@@ -23,4 +23,11 @@ struct ExrOptions {
 void write_error_exr(const std::string& path, const ErrorMap& map, ErrorMeasure measure,
                      const ExrOptions& options = {});
 
+/// Writes a PNG preview of the error map for a person to look at: each pixel's largest error
+/// on a colour scale from blue (0) through green and yellow to red (`scale_max`, or the map's
+/// largest error if 0), pixels outside the domain transparent, interpolated pixels lighter,
+/// and a 12-pixel colour bar from 0 to scale_max along the bottom. The file is written
+/// atomically. \throw InvalidInput for an empty map; IoError if it cannot be written.
+void write_error_png(const std::string& path, const ErrorMap& map, double scale_max = 0);
+
 }  // namespace tbs
