@@ -231,6 +231,17 @@ int run_fit(const FitCommandOptions& o) {
   std::error_code ec;
   if (fs::exists(o.output, ec) && fs::exists(o.input, ec) && fs::equivalent(o.input, o.output, ec))
     throw InvalidInput(o.output + ": the output would overwrite the input; choose another -o path");
+  for (const std::string& e : o.exports) {
+    try {
+      convert_format(e);
+    } catch (const InvalidInput& err) {
+      std::fprintf(stderr, "tbs: error: %s\n", err.what());
+      return kUsage;
+    }
+  }
+  for (const std::string& e : o.exports)
+    if ((fs::exists(e, ec) && fs::equivalent(o.input, e, ec)) || fs::path(e) == fs::path(o.output))
+      throw InvalidInput(e + ": an --export file would overwrite the scan or the .tbs; choose another path");
   const bool tty = isatty(fileno(stderr)) != 0;
   auto say = [&](const std::string& line) {
     if (o.quiet) return;
@@ -278,6 +289,19 @@ int run_fit(const FitCommandOptions& o) {
   std::printf("%-18s %.3e (%.4g %s)\n", "tolerance", rep.tolerance, rep.tolerance_abs, o.units.c_str());
   std::printf("%-18s %s (%s)\n", "converged", rep.converged ? "yes" : "no", rep.stop_reason.c_str());
   std::printf("%-18s %.2f s\n", "time", rep.seconds);
+  // --export: each file as `tbs convert OUT.tbs FILE` would write it (error maps from the scan).
+  for (const std::string& e : o.exports) {
+    ConvertOptions c;
+    c.input = o.output;
+    c.output = e;
+    c.points = o.input;
+    c.threads = o.fit.threads;
+    c.quiet = o.quiet;
+    std::printf("\n");
+    std::fflush(stdout);
+    const int code = run_convert(c);
+    if (code != kOk) return code;
+  }
   return kOk;
 }
 

@@ -4,6 +4,7 @@
 #include <tbs/fit.h>
 
 #include <string>
+#include <vector>
 
 namespace tbs::cli {
 
@@ -37,6 +38,7 @@ struct FitCommandOptions {
   std::string units = "unitless";
   bool no_features = false;
   bool quiet = false;
+  std::vector<std::string> exports;  // files to convert the result to, as `tbs convert` does
   FitOptions fit;  // the library's defaults are the command's defaults
 };
 int run_fit(const FitCommandOptions& o);
@@ -62,5 +64,8 @@ struct ConvertOptions {
   bool quiet = false;
 };
 int run_convert(const ConvertOptions& o);
+
+/// The format `tbs convert` writes for this output path. \throw InvalidInput if none.
+std::string convert_format(const std::string& output, const std::string& format = "");
 
 }  // namespace tbs::cli

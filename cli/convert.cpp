@@ -30,8 +30,13 @@ std::string lower(std::string s) {
   return s;
 }
 
+}  // namespace
+
 // The format named by --format or by the output's extension.
-std::string output_format(const ConvertOptions& o) {
+std::string convert_format(const std::string& output, const std::string& format) {
+  ConvertOptions o;
+  o.output = output;
+  o.format = format;
   static const std::vector<std::pair<std::string, std::string>> known = {
       {"step", "step"}, {"stp", "step"}, {"iges", "iges"}, {"igs", "iges"}, {"glb", "glb"}, {"gltf", "gltf"}, {"exr", "exr"}};
   std::string f = lower(o.format);
@@ -44,6 +49,8 @@ std::string output_format(const ConvertOptions& o) {
   throw InvalidInput(o.output + ": unknown output format '" + f +
                      "': use an extension .step, .stp, .iges, .igs, .glb, .gltf or .exr, or --format");
 }
+
+namespace {
 
 // A short description for the file header: the fit's key figures from the .tbs metadata,
 // in plain ASCII without quotes (STEP and IGES strings).
@@ -79,7 +86,7 @@ int run_convert(const ConvertOptions& o) {
     throw InvalidInput(o.output + ": the output would overwrite the input; choose another path");
   std::string format;
   try {
-    format = output_format(o);
+    format = convert_format(o.output, o.format);
   } catch (const InvalidInput& e) {
     // A file name tbs cannot write is a usage error, like an unknown option.
     std::fprintf(stderr, "tbs: error: %s\n", e.what());

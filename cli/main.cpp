@@ -92,6 +92,10 @@ int main(int argc, char** argv) {
                                                    "does not depend on it")
       ->check(CLI::NonNegativeNumber);
   fit_cmd->add_flag("--quiet,-q", fit.quiet, "No progress messages on stderr");
+  fit_cmd->add_option("--export", fit.exports,
+                      "Also write the result to this file, as 'tbs convert OUT.tbs FILE' does with "
+                      "its defaults (.step .stp .iges .igs .glb .gltf, or .exr: the error map of this "
+                      "scan); repeatable");
 
   ConvertOptions convert;
   auto* convert_cmd = app.add_subcommand(

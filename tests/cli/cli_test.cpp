@@ -333,6 +333,26 @@ TEST(CliConvert, ErrorMapOfTheFittedScan) {
   EXPECT_FALSE(fs::exists(dir / "none.png"));
 }
 
+TEST(CliFit, ExportsInTheSameCall) {
+  const fs::path dir = temp_dir();
+  const std::string scan = std::string(TBS_SOURCE_DIR) + "/samples/bracket.ply";
+  Result r = run("fit '" + scan + "' -o '" + (dir / "e.tbs").string() + "' --units mm -q --export '" +
+                 (dir / "e.glb").string() + "' --export '" + (dir / "e.exr").string() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const char* f : {"e.tbs", "e.glb", "e.exr", "e.png"}) EXPECT_TRUE(fs::exists(dir / f)) << f;
+  EXPECT_NE(r.out.find("glTF 2.0, binary"), std::string::npos) << r.out;
+  // An export tbs cannot write is refused before fitting: nothing is written.
+  r = run("fit '" + scan + "' -o '" + (dir / "f.tbs").string() + "' --export '" + (dir / "f.dxf").string() + "'");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("f.dxf: unknown output format"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "f.tbs"));
+  // Nor may an export overwrite the fit's own output.
+  r = run("fit '" + scan + "' -o '" + (dir / "h.glb").string() + "' --export '" + (dir / "h.glb").string() + "'");
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("would overwrite the scan or the .tbs"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "h.glb"));
+}
+
 TEST(CliConvert, ExactAndOptions) {
   const fs::path out = temp_dir() / "exact.stp";
   const Result r = run("convert '" + small_spline().string() + "' '" + out.string() +
