@@ -38,7 +38,7 @@ std::string convert_format(const std::string& output, const std::string& format)
   o.output = output;
   o.format = format;
   static const std::vector<std::pair<std::string, std::string>> known = {
-      {"step", "step"}, {"stp", "step"}, {"iges", "iges"}, {"igs", "iges"}, {"glb", "glb"}, {"gltf", "gltf"}, {"exr", "exr"}};
+      {"step", "step"}, {"stp", "step"}, {"iges", "iges"}, {"igs", "iges"}, {"glb", "glb"}, {"gltf", "gltf"}, {"exr", "exr"}, {"obj", "obj"}, {"ply", "ply"}};
   std::string f = lower(o.format);
   if (f.empty()) {
     f = lower(std::filesystem::path(o.output).extension().string());
@@ -47,7 +47,7 @@ std::string convert_format(const std::string& output, const std::string& format)
   for (const auto& [name, format] : known)
     if (f == name) return format;
   throw InvalidInput(o.output + ": unknown output format '" + f +
-                     "': use an extension .step, .stp, .iges, .igs, .glb, .gltf or .exr, or --format");
+                     "': use an extension .step, .stp, .iges, .igs, .glb, .gltf, .obj, .ply or .exr, or --format");
 }
 
 namespace {
@@ -138,7 +138,7 @@ int run_convert(const ConvertOptions& o) {
     return kOk;
   }
 
-  if (format == "glb" || format == "gltf") {
+  if (format == "glb" || format == "gltf" || format == "obj" || format == "ply") {
     TessellateOptions to;
     to.threads = o.threads;
     if (o.resolution > 0) {
@@ -152,10 +152,13 @@ int run_convert(const ConvertOptions& o) {
     go.generator = "tbs " TBS_VERSION;
     go.name = o.product_name.empty() ? fs::path(o.output).stem().string() : o.product_name;
     say("writing " + std::to_string(mesh.faces.size()) + " triangles to " + o.output);
-    const MeshExportReport r = write_gltf(o.output, mesh, s.domain().bounding_box(), go);
+    const bool gltf = format == "glb" || format == "gltf";
+    const MeshExportReport r = gltf ? write_gltf(o.output, mesh, s.domain().bounding_box(), go)
+                                    : write_mesh_soup(o.output, mesh);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::printf("%-18s %s\n", "input", o.input.c_str());
-    std::printf("%-18s %s (glTF 2.0%s)\n", "output", o.output.c_str(), format == "glb" ? ", binary" : "");
+    const char* kind = format == "glb" ? "glTF 2.0, binary" : format == "gltf" ? "glTF 2.0" : format == "obj" ? "OBJ" : "PLY, binary";
+    std::printf("%-18s %s (%s)\n", "output", o.output.c_str(), kind);
     std::printf("%-18s %zu triangles, %zu vertices\n", "mesh", r.faces, r.vertices);
     std::printf("%-18s %.3g %s%s\n", "max chordal dev.", mesh.max_chordal_deviation,
                 file.units.c_str(), o.resolution > 0 ? "" : " (adaptive)");

@@ -104,13 +104,13 @@ int main(int argc, char** argv) {
                  "shell and checked by OpenCASCADE before writing. By default the surface is "
                  "written as compact Bezier patches within --cad-tolerance of the spline; "
                  "--exact writes its exact polynomial pieces instead. Or a glTF 2.0 mesh (.glb, "
-                 ".gltf) with normals, (u, v) and domain-triangle ids. Or an error map of the "
+                 ".gltf) with normals, (u, v) and domain-triangle ids, or OBJ / PLY. Or an error map of the "
                  "scan (--points) as OpenEXR (.exr) with a PNG preview beside it. A summary "
                  "goes to stdout.");
   convert_cmd->add_option("input", convert.input, "The .tbs file")->required();
   convert_cmd->add_option("output", convert.output, "The file to write (format from the extension)")->required();
-  convert_cmd->add_option("--format", convert.format, "Output format, overriding the extension: step, iges, glb, gltf, exr")
-      ->check(CLI::IsMember({"step", "stp", "iges", "igs", "glb", "gltf", "exr"}, CLI::ignore_case));
+  convert_cmd->add_option("--format", convert.format, "Output format, overriding the extension: step, iges, glb, gltf, obj, ply, exr")
+      ->check(CLI::IsMember({"step", "stp", "iges", "igs", "glb", "gltf", "obj", "ply", "exr"}, CLI::ignore_case));
   convert_cmd->add_option("--points", convert.points,
                           "Error maps (exr): the scan the spline was fitted to (with parameters u v)");
   convert_cmd->add_option("--width", convert.width, "Error maps: pixels across u (the height keeps the domain's aspect)")
@@ -120,7 +120,7 @@ int main(int argc, char** argv) {
                           "reports) or closest (distance to the closest surface point)")
       ->check(CLI::IsMember({"parameter", "closest"}))->capture_default_str();
   convert_cmd->add_option("--resolution", convert.resolution,
-                          "Meshes (glb, gltf): cut every domain edge into this many segments "
+                          "Meshes (glb, gltf, obj, ply): cut every domain edge into this many segments "
                           "(default: adaptive to --chordal-tolerance)")
       ->check(CLI::Range(1, 4096));
   convert_cmd->add_option("--chordal-tolerance", convert.chordal_tolerance,

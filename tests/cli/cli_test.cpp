@@ -304,6 +304,12 @@ TEST(CliConvert, WritesGltfMeshes) {
   EXPECT_EQ(read_file((dir / "m.glb").string()).substr(0, 4), "glTF");  // the GLB magic
   r = run("convert '" + small_spline().string() + "' '" + (dir / "m.gltf").string() + "' --resolution 2 -q");
   ASSERT_EQ(r.code, 0) << r.err;
+  r = run("convert '" + small_spline().string() + "' '" + (dir / "m.obj").string() + "' --resolution 2 -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("(OBJ)"), std::string::npos) << r.out;
+  r = run("convert '" + small_spline().string() + "' '" + (dir / "m.ply").string() + "' --resolution 2 -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(read_file((dir / "m.ply").string()).find("binary_little_endian"), std::string::npos);
   // 2 x 2 faces per domain triangle.
   const int triangles = read_tbs(small_spline().string()).spline.domain().triangle_count();
   EXPECT_NE(r.out.find(std::to_string(4 * triangles) + " triangles"), std::string::npos) << r.out;

@@ -33,4 +33,10 @@ struct MeshExportReport {
 MeshExportReport write_gltf(const std::string& path, const Mesh& mesh, const Box2& domain,
                             const GltfOptions& options = {});
 
+/// Writes the mesh's positions and faces as OBJ (ASCII, 17 digits) or binary PLY, chosen by the
+/// extension (.obj, .ply), through CGAL's polygon-soup writers; shared vertices stay shared.
+/// The file is written atomically. \throw InvalidInput for an empty mesh or another extension;
+/// IoError if it cannot be written.
+MeshExportReport write_mesh_soup(const std::string& path, const Mesh& mesh);
+
 }  // namespace tbs
