@@ -195,16 +195,9 @@ class Builder {
     return sd;
   }
 
-  // F at u on the side of triangle `t`'s interior.
+  // F at u on the side of the triangle's interior.
   SurfacePoint eval_in(const std::array<Point2, 3>& tri, const Point2& u) const {
-    const Point2 c = (tri[0] + tri[1] + tri[2]) / 3.0;
-    Point2 second = tri[0];
-    double best = -1;
-    for (const Point2& v : tri) {
-      const double a = std::fabs(det3(u, c, v));
-      if (a > best) best = a, second = v;
-    }
-    return detail::evaluate_toward(ev_, u, c, second);
+    return detail::evaluate_in_triangle(ev_, tri, u);
   }
   std::array<Point2, 3> domain_corners(int t) const {
     const auto& tri = d_.triangle(t);
@@ -309,10 +302,7 @@ class Builder {
 CadPatches Builder::run() {
   const int nt = d_.triangle_count();
   for (int t = 0; t < nt; ++t) make_leaf(t, 0, {IBary{kOne, 0, 0}, IBary{0, kOne, 0}, IBary{0, 0, kOne}});
-  Box3 box;
-  for (const Point3& c : s_.control_points()) box.extend(c);
-  const double size = box.empty() ? 1.0 : std::max((box.max - box.min).norm(), 1e-300);
-  const double tol = o_.tolerance_abs > 0 ? o_.tolerance_abs : o_.tolerance * size;
+  const double tol = o_.tolerance_abs > 0 ? o_.tolerance_abs : o_.tolerance * detail::model_size(s_);
   const double angle_tol = o_.angle_tolerance;
   tbb::task_arena arena(o_.threads > 0 ? o_.threads : tbb::task_arena::automatic);
   const int nb = beta_count(m_);

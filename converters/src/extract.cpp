@@ -319,17 +319,9 @@ Extraction extract_bezier(const Spline& s, const ExtractOptions& options) {
   const int np = static_cast<int>(out.pieces.size());
   const int nv = static_cast<int>(out.vertices.size());
   auto corner = [&](int p, int j) -> const Point2& { return out.vertices[out.pieces[p].corners[j]]; };
-  auto centroid = [&](int p) -> Point2 { return (corner(p, 0) + corner(p, 1) + corner(p, 2)) / 3.0; };
   // A point of piece p evaluated on p's side.
   auto eval_in = [&](int p, const Point2& u) {
-    const Point2 c = centroid(p);
-    Point2 second = corner(p, 0);
-    double best = -1;
-    for (int j = 0; j < 3; ++j) {
-      const double a = std::fabs(det3(u, c, corner(p, j)));
-      if (a > best) best = a, second = corner(p, j);
-    }
-    return detail::evaluate_toward(ev, u, c, second).position;
+    return detail::evaluate_in_triangle(ev, {corner(p, 0), corner(p, 1), corner(p, 2)}, u).position;
   };
 
   std::vector<int> vertex_piece(nv, -1);

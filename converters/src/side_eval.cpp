@@ -3,6 +3,9 @@
 #include <tbs/errors.h>
 #include <tbs/predicates.h>
 
+#include <algorithm>
+#include <cmath>
+
 namespace tbs::detail {
 
 SurfacePoint evaluate_toward(const Evaluator& ev, const Point2& u, const Point2& toward,
@@ -24,6 +27,23 @@ SurfacePoint evaluate_toward(const Evaluator& ev, const Point2& u, const Point2&
   }
   if (used) *used = toward;
   return ev.evaluate(toward);
+}
+
+SurfacePoint evaluate_in_triangle(const Evaluator& ev, const std::array<Point2, 3>& tri, const Point2& u) {
+  const Point2 c = (tri[0] + tri[1] + tri[2]) / 3.0;
+  Point2 second = tri[0];
+  double best = -1;
+  for (const Point2& v : tri) {
+    const double a = std::fabs(det3(u, c, v));
+    if (a > best) best = a, second = v;
+  }
+  return evaluate_toward(ev, u, c, second);
+}
+
+double model_size(const Spline& s) {
+  Box3 box;
+  for (const Point3& c : s.control_points()) box.extend(c);
+  return box.empty() ? 1.0 : std::max((box.max - box.min).norm(), 1e-300);
 }
 
 }  // namespace tbs::detail

@@ -3,6 +3,8 @@
 
 #include <tbs/evaluator.h>
 
+#include <array>
+
 namespace tbs::detail {
 
 // F and its partial derivatives at u, on the piece that contains u + eps (toward - u), i.e.
@@ -12,6 +14,14 @@ namespace tbs::detail {
 // and evaluated there; `used` receives the parameter actually evaluated.
 SurfacePoint evaluate_toward(const Evaluator& ev, const Point2& u, const Point2& toward,
                              const Point2& second, Point2* used = nullptr);
+
+// F at a point u of the triangle `tri` (closed), on the side of its interior: toward its
+// centroid, ties broken toward the corner farthest from that line.
+SurfacePoint evaluate_in_triangle(const Evaluator& ev, const std::array<Point2, 3>& tri, const Point2& u);
+
+// The model size the relative tolerances refer to: the diagonal of the control points'
+// bounding box (1 for an empty spline).
+double model_size(const Spline& s);
 
 // The unit normal of a surface point, zero where F_u x F_v vanishes.
 inline Vector3 unit_normal(const SurfacePoint& p) {

@@ -93,10 +93,7 @@ Mesh tessellate(const Spline& s, const TessellateOptions& o) {
 
   Mesh mesh;
   mesh.resolution.assign(nt, o.resolution);
-  Box3 box;
-  for (const Point3& c : s.control_points()) box.extend(c);
-  const double size = box.empty() ? 1.0 : (box.max - box.min).norm();
-  const double tol = o.chordal_tolerance_abs > 0 ? o.chordal_tolerance_abs : o.chordal_tolerance * size;
+  const double tol = o.chordal_tolerance_abs > 0 ? o.chordal_tolerance_abs : o.chordal_tolerance * detail::model_size(s);
   if (adaptive) {
     arena.execute([&] {
       tbb::parallel_for(0, nt, [&](int t) {
