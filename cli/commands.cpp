@@ -273,6 +273,10 @@ int run_fit(const FitCommandOptions& o) {
   meta["source"] = fs::path(o.input).filename().string();
   meta["fit"] = json::parse(rep.to_json(false));
   SplineFile file{r.spline, o.units, meta.dump()};
+  if (o.keep_points) {
+    file.points = scan.positions;
+    file.point_parameters = r.uv;
+  }
   write_tbs(o.output, file);
   if (!o.report.empty()) write_file_atomic(o.report, rep.to_json(true) + "\n");
 
@@ -294,7 +298,7 @@ int run_fit(const FitCommandOptions& o) {
     ConvertOptions c;
     c.input = o.output;
     c.output = e;
-    c.points = o.input;
+    if (!o.keep_points) c.points = o.input;  // else the points stored in the .tbs
     c.threads = o.fit.threads;
     c.quiet = o.quiet;
     std::printf("\n");

@@ -37,6 +37,7 @@ struct FitCommandOptions {
   std::string report;  // empty: none
   std::string units = "unitless";
   bool no_features = false;
+  bool keep_points = false;  // store the points and their parameters in the .tbs
   bool quiet = false;
   std::vector<std::string> exports;  // files to convert the result to, as `tbs convert` does
   FitOptions fit;  // the library's defaults are the command's defaults
@@ -55,7 +56,8 @@ struct ConvertOptions {
   std::string triangle_patch = "quads";
   std::string units;         // empty: the .tbs units (mm when unitless)
   std::string product_name;  // empty: the output's file name without extension
-  std::string points;        // error maps: the scan with parameters
+  std::string points;        // error maps and heat maps: the scan with parameters (empty: the .tbs's own)
+  std::string color_by = "none";  // meshes (glb, gltf): "error" adds a COLOR_0 heat map
   int width = 512;           // error maps: pixels across u
   std::string measure = "parameter";
   int resolution = 0;        // meshes: uniform resolution; 0 = adaptive

@@ -20,6 +20,8 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
+#include <optional>
 
 namespace tbs::cli {
 
@@ -76,6 +78,63 @@ std::string describe(const SplineFile& f) {
   return clean;
 }
 
+// The points an error map or heat map needs: from --points, else those stored in the .tbs.
+struct Points {
+  std::vector<Point3> positions;
+  std::vector<Point2> uv;
+  std::string source;
+};
+
+Points points_for(const ConvertOptions& o, const SplineFile& file, const std::string& what,
+                  const std::function<void(const std::string&)>& say) {
+  Points p;
+  if (o.points.empty()) {
+    if (file.points.empty())
+      throw InvalidInput(o.output + ": " + what + " needs the scanned points: add --points SCAN (the scan "
+                         "the spline was fitted to, with its parameters u v), or fit with --keep-points");
+    p.positions = file.points;
+    p.uv = file.point_parameters;
+    p.source = o.input + " (stored points)";
+    return p;
+  }
+  say("reading " + o.points);
+  Scan scan = read_scan(o.points);
+  if (scan.uv.empty())
+    throw InvalidInput(o.points + ": these points have no parameters (u, v); " + what +
+                       " needs the scan the spline was fitted to");
+  p.positions = std::move(scan.positions);
+  p.uv = std::move(scan.uv);
+  p.source = o.points;
+  return p;
+}
+
+// The fit tolerance in model units from the .tbs metadata, 0 if it is not there.
+double fit_tolerance(const SplineFile& file) {
+  try {
+    const auto meta = nlohmann::json::parse(file.metadata_json);
+    if (meta.contains("fit")) return meta["fit"].value("tolerance_abs", 0.0);
+  } catch (const std::exception&) {
+  }
+  return 0;
+}
+
+struct MeasuredMap {
+  PointErrors errors;
+  ErrorMap map;
+};
+
+MeasuredMap measure_map(const ConvertOptions& o, const Spline& s, const Points& pts,
+                        const std::function<void(const std::string&)>& say) {
+  const ErrorMeasure measure = o.measure == "closest" ? ErrorMeasure::Closest : ErrorMeasure::Parameter;
+  say("measuring " + std::to_string(pts.positions.size()) + " points");
+  MeasuredMap r;
+  r.errors = point_errors(s, pts.positions, pts.uv, {.measure = measure, .threads = o.threads});
+  r.map = make_error_map(s, measure == ErrorMeasure::Closest ? std::span<const Point2>(r.errors.foot)
+                                                             : std::span<const Point2>(pts.uv),
+                         r.errors, {.width = o.width, .threads = o.threads});
+  return r;
+}
+
 }  // namespace
 
 int run_convert(const ConvertOptions& o) {
@@ -92,6 +151,16 @@ int run_convert(const ConvertOptions& o) {
     std::fprintf(stderr, "tbs: error: %s\n", e.what());
     return kUsage;
   }
+  if (o.color_by == "error" && format != "glb" && format != "gltf") {
+    std::fprintf(stderr, "tbs: error: %s: --color-by error needs a glTF output (.glb or .gltf)\n", o.output.c_str());
+    return kUsage;
+  }
+  if (format == "gltf") {
+    const std::string bin = fs::path(o.output).replace_extension(".bin").string();
+    if ((fs::exists(bin, ec) && fs::equivalent(o.input, bin, ec)) ||
+        (!o.points.empty() && fs::exists(bin, ec) && fs::exists(o.points, ec) && fs::equivalent(o.points, bin, ec)))
+      throw InvalidInput(bin + ": the glTF buffer file would overwrite an input; choose another output name");
+  }
   auto say = [&](const std::string& line) {
     if (!o.quiet) std::fprintf(stderr, "tbs convert: %s\n", line.c_str());
   };
@@ -99,26 +168,12 @@ int run_convert(const ConvertOptions& o) {
   const Spline& s = file.spline;
 
   if (format == "exr") {
-    if (o.points.empty())
-      throw InvalidInput(o.output + ": an error map needs the scanned points: add --points SCAN (the scan "
-                         "the spline was fitted to, with its parameters u v)");
-    say("reading " + o.points);
-    const Scan scan = read_scan(o.points);
-    if (scan.uv.empty())
-      throw InvalidInput(o.points + ": these points have no parameters (u, v); an error map needs the "
-                         "scan the spline was fitted to");
-    const ErrorMeasure measure = o.measure == "closest" ? ErrorMeasure::Closest : ErrorMeasure::Parameter;
-    say("measuring " + std::to_string(scan.positions.size()) + " points");
-    const PointErrors e = point_errors(s, scan.positions, scan.uv, {.measure = measure, .threads = o.threads});
-    const ErrorMap map = make_error_map(s, measure == ErrorMeasure::Closest ? std::span<const Point2>(e.foot)
-                                                                           : std::span<const Point2>(scan.uv),
-                                       e, {.width = o.width, .threads = o.threads});
-    double tolerance = 0;
-    try {
-      const auto meta = nlohmann::json::parse(file.metadata_json);
-      if (meta.contains("fit")) tolerance = meta["fit"].value("tolerance_abs", 0.0);
-    } catch (const std::exception&) {
-    }
+    const Points pts = points_for(o, file, "an error map", say);
+    const MeasuredMap mm = measure_map(o, s, pts, say);
+    const PointErrors& e = mm.errors;
+    const ErrorMap& map = mm.map;
+    const ErrorMeasure measure = e.measure;
+    const double tolerance = fit_tolerance(file);
     const std::string png = (fs::path(o.output).parent_path() / fs::path(o.output).stem()).string() + ".png";
     write_error_exr(o.output, map, measure, {.units = file.units, .tolerance = tolerance});
     write_error_png(png, map, tolerance > 0 ? std::max(tolerance, e.stats.max) : 0.0);
@@ -127,7 +182,7 @@ int run_convert(const ConvertOptions& o) {
     std::printf("%-18s %s\n", "input", o.input.c_str());
     std::printf("%-18s %s (OpenEXR, %d x %d) and %s (preview)\n", "output", o.output.c_str(), map.width,
                 map.height, png.c_str());
-    std::printf("%-18s %zu (%zu outside the domain)\n", "points", e.stats.count, e.outside);
+    std::printf("%-18s %zu (%zu outside the domain), from %s\n", "points", e.stats.count, e.outside, pts.source.c_str());
     std::printf("%-18s %s\n", "measure", measure == ErrorMeasure::Closest ? "closest surface point" : "at the point's parameter");
     std::printf("%-18s %.4g %s\n", "max error", e.stats.max, u);
     std::printf("%-18s %.4g %s\n", "RMS error", e.stats.rms, u);
@@ -151,15 +206,34 @@ int run_convert(const ConvertOptions& o) {
     GltfOptions go;
     go.generator = "tbs " TBS_VERSION;
     go.name = o.product_name.empty() ? fs::path(o.output).stem().string() : o.product_name;
-    say("writing " + std::to_string(mesh.faces.size()) + " triangles to " + o.output);
     const bool gltf = format == "glb" || format == "gltf";
+    std::optional<MeasuredMap> heat;
+    if (o.color_by == "error") {
+      const Points pts = points_for(o, file, "--color-by error", say);
+      heat = measure_map(o, s, pts, say);
+      go.vertex_values.resize(mesh.positions.size());
+      for (size_t v = 0; v < mesh.positions.size(); ++v) go.vertex_values[v] = error_at(heat->map, mesh.parameters[v]);
+      const double tol = fit_tolerance(file);
+      go.color_scale_max = tol > 0 ? std::max(tol, heat->errors.stats.max) : heat->errors.stats.max;
+      go.units = file.units;
+      go.color_quantity = heat->errors.measure == ErrorMeasure::Closest ? "distance to the closest surface point"
+                                                                        : "distance at the point's parameter";
+    }
+    say("writing " + std::to_string(mesh.faces.size()) + " triangles to " + o.output);
     const MeshExportReport r = gltf ? write_gltf(o.output, mesh, s.domain().bounding_box(), go)
                                     : write_mesh_soup(o.output, mesh);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::printf("%-18s %s\n", "input", o.input.c_str());
-    const char* kind = format == "glb" ? "glTF 2.0, binary" : format == "gltf" ? "glTF 2.0" : format == "obj" ? "OBJ" : "PLY, binary";
-    std::printf("%-18s %s (%s)\n", "output", o.output.c_str(), kind);
+    const std::string kind = format == "glb"    ? "glTF 2.0, binary"
+                             : format == "gltf" ? "glTF 2.0, buffer in " + fs::path(o.output).replace_extension(".bin").filename().string()
+                             : format == "obj"  ? "OBJ"
+                                                : "PLY, binary";
+    std::printf("%-18s %s (%s)\n", "output", o.output.c_str(), kind.c_str());
     std::printf("%-18s %zu triangles, %zu vertices\n", "mesh", r.faces, r.vertices);
+    if (heat)
+      std::printf("%-18s COLOR_0: error 0 (blue) .. %.4g %s (red); max error %.4g, RMS %.4g %s\n", "colours",
+                  go.color_scale_max, file.units.c_str(), heat->errors.stats.max, heat->errors.stats.rms,
+                  file.units.c_str());
     std::printf("%-18s %.3g %s%s\n", "max chordal dev.", mesh.max_chordal_deviation,
                 file.units.c_str(), o.resolution > 0 ? "" : " (adaptive)");
     std::printf("%-18s %.2f s\n", "time", seconds);

@@ -3,6 +3,7 @@
 #include "commands.h"
 
 #include <tbs/errors.h>
+#include <tbs/io.h>
 
 #include <CLI/CLI.hpp>
 
@@ -21,6 +22,9 @@ std::string lower_ascii(std::string s) {
 
 int main(int argc, char** argv) {
   using namespace tbs::cli;
+  // Ctrl-C or a kill while a file is being written: remove the temporary file, keep any earlier
+  // output, and end as the signal says (exit status 128 + signal in a shell).
+  tbs::remove_outputs_on_signal();
   CLI::App app{"tbs " TBS_VERSION ": triangular B-spline (DMS spline) surfaces from 3D scans, "
                "for CAD.\nThis version fits splines to scans whose points carry parameters (u, v), "
                "inspects and evaluates .tbs splines, and converts them to STEP, IGES and glTF.\n"
@@ -92,6 +96,9 @@ int main(int argc, char** argv) {
                                                    "does not depend on it")
       ->check(CLI::NonNegativeNumber);
   fit_cmd->add_flag("--quiet,-q", fit.quiet, "No progress messages on stderr");
+  fit_cmd->add_flag("--keep-points", fit.keep_points,
+                    "Store the points and their parameters in the .tbs, so that 'tbs convert' can make "
+                    "error maps and heat maps without --points (the file grows by about 100 bytes a point)");
   fit_cmd->add_option("--export", fit.exports,
                       "Also write the result to this file, as 'tbs convert OUT.tbs FILE' does with "
                       "its defaults (.step .stp .iges .igs .glb .gltf, or .exr: the error map of this "
@@ -112,8 +119,13 @@ int main(int argc, char** argv) {
   convert_cmd->add_option("--format", convert.format, "Output format, overriding the extension: step, iges, glb, gltf, obj, ply, exr")
       ->check(CLI::IsMember({"step", "stp", "iges", "igs", "glb", "gltf", "obj", "ply", "exr"}, CLI::ignore_case));
   convert_cmd->add_option("--points", convert.points,
-                          "Error maps (exr): the scan the spline was fitted to (with parameters u v)");
-  convert_cmd->add_option("--width", convert.width, "Error maps: pixels across u (the height keeps the domain's aspect)")
+                          "Error maps (exr) and --color-by error: the scan the spline was fitted to (with "
+                          "parameters u v); default: the points stored by 'tbs fit --keep-points'");
+  convert_cmd->add_option("--color-by", convert.color_by,
+                          "glTF meshes: none, or error (a COLOR_0 heat map of the points' error, blue 0 to "
+                          "red at the fit tolerance or the largest error; needs the points)")
+      ->check(CLI::IsMember({"none", "error"}))->capture_default_str();
+  convert_cmd->add_option("--width", convert.width, "Error maps and --color-by error: pixels across u (the height keeps the domain's aspect)")
       ->check(CLI::Range(1, 16384))->capture_default_str();
   convert_cmd->add_option("--measure", convert.measure,
                           "Error maps: parameter (|p - F(u)| at the point's own parameter, as the fit "

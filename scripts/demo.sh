@@ -43,12 +43,12 @@ echo "== tbs convert $out/bracket.tbs $out/bracket.step (and .igs): CAD files th
 "$tbs" convert "$out/bracket.tbs" "$out/bracket.step" --quiet
 "$tbs" convert "$out/bracket.tbs" "$out/bracket.igs" --quiet | tail -n +2 | head -2
 echo
-echo "== tbs convert $out/bracket.tbs $out/bracket.glb: a glTF mesh for viewers"
-"$tbs" convert "$out/bracket.tbs" "$out/bracket.glb" --quiet
+echo "== tbs convert $out/bracket.tbs $out/bracket.glb --points $scan --color-by error: a glTF mesh for viewers, coloured by the error"
+"$tbs" convert "$out/bracket.tbs" "$out/bracket.glb" --points "$scan" --color-by error --quiet
 echo
 echo "== tbs convert $out/bracket.tbs $out/bracket.exr --points $scan: the error map (+ .png preview)"
 "$tbs" convert "$out/bracket.tbs" "$out/bracket.exr" --points "$scan" --quiet
 echo
 echo "Outputs in $out: bracket.tbs (the spline), report.json (fit report), info.json,"
-echo "bracket.step and bracket.igs (the surface as B-spline faces in one shell), bracket.glb (mesh),"
+echo "bracket.step and bracket.igs (the surface as B-spline faces in one shell), bracket.glb (mesh coloured by the error),"
 echo "bracket.exr (error map and geometry image) and bracket.png (its preview)"

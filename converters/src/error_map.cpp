@@ -243,4 +243,37 @@ ErrorMap make_error_map(const Spline& s, std::span<const Point2> uv, const Point
   return m;
 }
 
+float error_at(const ErrorMap& m, const Point2& u) {
+  if (m.width < 1 || m.height < 1) return std::numeric_limits<float>::quiet_NaN();
+  const double w = m.domain.max.x() - m.domain.min.x(), h = m.domain.max.y() - m.domain.min.y();
+  const double fx = (u.x() - m.domain.min.x()) * (m.width / std::max(w, 1e-300));
+  const double fy = (m.domain.max.y() - u.y()) * (m.height / std::max(h, 1e-300));
+  const long x0 = std::clamp(static_cast<long>(std::floor(fx)), 0L, long(m.width) - 1);
+  const long y0 = std::clamp(static_cast<long>(std::floor(fy)), 0L, long(m.height) - 1);
+  // The nearest pixel with a value, by the distance from u to the pixel centre.
+  constexpr int kReach = 3;
+  float best = std::numeric_limits<float>::quiet_NaN();
+  double best_d2 = std::numeric_limits<double>::infinity();
+  for (long y = std::max(0L, y0 - kReach); y <= std::min(long(m.height) - 1, y0 + kReach); ++y)
+    for (long x = std::max(0L, x0 - kReach); x <= std::min(long(m.width) - 1, x0 + kReach); ++x) {
+      const size_t p = static_cast<size_t>(y) * m.width + x;
+      if (m.mask[p] == PixelKind::Outside) continue;
+      const double d2 = (x == x0 && y == y0) ? -1.0 : (x + 0.5 - fx) * (x + 0.5 - fx) + (y + 0.5 - fy) * (y + 0.5 - fy);
+      if (d2 < best_d2) best_d2 = d2, best = m.error[p];
+    }
+  return best;
+}
+
+std::array<uint8_t, 3> heat_colour(double t) {
+  t = std::isnan(t) ? 0.0 : std::clamp(t, 0.0, 1.0);
+  const double stops[5][3] = {{0.1, 0.2, 0.9}, {0.0, 0.8, 0.9}, {0.1, 0.8, 0.2}, {0.95, 0.85, 0.1}, {0.9, 0.1, 0.1}};
+  const double f = t * 4;
+  const int i = std::min(static_cast<int>(f), 3);
+  const double s = f - i;
+  std::array<uint8_t, 3> c{};
+  for (int k = 0; k < 3; ++k)
+    c[k] = static_cast<uint8_t>(std::lround(255 * ((1 - s) * stops[i][k] + s * stops[i + 1][k])));
+  return c;
+}
+
 }  // namespace tbs

@@ -92,19 +92,6 @@ void write_error_exr(const std::string& path, const ErrorMap& m, ErrorMeasure me
 
 namespace {
 
-// Blue -> cyan -> green -> yellow -> red for x in [0, 1].
-std::array<uint8_t, 3> heat(double x) {
-  x = std::clamp(x, 0.0, 1.0);
-  const double stops[5][3] = {{0.1, 0.2, 0.9}, {0.0, 0.8, 0.9}, {0.1, 0.8, 0.2}, {0.95, 0.85, 0.1}, {0.9, 0.1, 0.1}};
-  const double f = x * 4;
-  const int i = std::min(static_cast<int>(f), 3);
-  const double t = f - i;
-  std::array<uint8_t, 3> c{};
-  for (int k = 0; k < 3; ++k)
-    c[k] = static_cast<uint8_t>(std::lround(255 * ((1 - t) * stops[i][k] + t * stops[i + 1][k])));
-  return c;
-}
-
 void collect_png(void* context, void* data, int size) {
   auto* out = static_cast<std::string*>(context);
   out->append(static_cast<const char*>(data), static_cast<size_t>(size));
@@ -121,7 +108,7 @@ void write_error_png(const std::string& path, const ErrorMap& m, double scale_ma
   std::vector<uint8_t> rgba(static_cast<size_t>(m.width) * h * 4, 0);
   for (size_t i = 0; i < np; ++i) {
     if (m.mask[i] == PixelKind::Outside) continue;
-    auto c = heat(m.error[i] / scale_max);
+    auto c = heat_colour(m.error[i] / scale_max);
     if (m.mask[i] == PixelKind::Interpolated)
       for (auto& v : c) v = static_cast<uint8_t>((v + 255) / 2);
     for (int k = 0; k < 3; ++k) rgba[4 * i + k] = c[k];
@@ -129,7 +116,7 @@ void write_error_png(const std::string& path, const ErrorMap& m, double scale_ma
   }
   for (int y = m.height + 2; y < h; ++y)
     for (int x = 0; x < m.width; ++x) {
-      const auto c = heat(m.width > 1 ? double(x) / (m.width - 1) : 0.0);
+      const auto c = heat_colour(m.width > 1 ? double(x) / (m.width - 1) : 0.0);
       const size_t i = static_cast<size_t>(y) * m.width + x;
       for (int k = 0; k < 3; ++k) rgba[4 * i + k] = c[k];
       rgba[4 * i + 3] = 255;

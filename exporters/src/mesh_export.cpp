@@ -1,12 +1,16 @@
 #include <tbs/errors.h>
 #include <tbs/io.h>
+#include <tbs/error_map.h>
 #include <tbs/mesh_export.h>
 
+#include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
 
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <cmath>
 #include <map>
 #include <sstream>
 
@@ -41,6 +45,36 @@ int add_accessor(tinygltf::Model& m, const std::vector<T>& data, int component_t
   return static_cast<int>(m.accessors.size()) - 1;
 }
 
+// Writes a temporary file of an AtomicOutput. \throw IoError naming `path`.
+void put(const std::string& temp, std::string_view data, const std::string& path) {
+  std::ofstream f(temp, std::ios::binary | std::ios::trunc);
+  f.write(data.data(), static_cast<std::streamsize>(data.size()));
+  f.flush();
+  if (!f) throw IoError("cannot write '" + path + "': write failed (disk full?)");
+}
+
+// 8-bit sRGB to the linear values glTF colours are.
+float linear(uint8_t c) {
+  const double x = c / 255.0;
+  return static_cast<float>(x <= 0.04045 ? x / 12.92 : std::pow((x + 0.055) / 1.055, 2.4));
+}
+
+// A relative URI reference for a file name: RFC 3986 unreserved characters kept, all other
+// bytes percent-encoded.
+std::string uri_of(const std::string& name) {
+  std::string out;
+  for (unsigned char c : name) {
+    if (std::isalnum(c) || c == '-' || c == '.' || c == '_' || c == '~') {
+      out += static_cast<char>(c);
+    } else {
+      char buf[4];
+      std::snprintf(buf, sizeof buf, "%%%02X", c);
+      out += buf;
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 MeshExportReport write_gltf(const std::string& path, const Mesh& mesh, const Box2& domain,
@@ -49,6 +83,9 @@ MeshExportReport write_gltf(const std::string& path, const Mesh& mesh, const Box
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   if (ext != ".glb" && ext != ".gltf") throw InvalidInput(path + ": glTF files end in .glb or .gltf");
   if (mesh.faces.empty()) throw InvalidInput(path + ": the mesh has no faces");
+  if (!o.vertex_values.empty() && o.vertex_values.size() != mesh.positions.size())
+    throw InvalidInput(path + ": " + std::to_string(o.vertex_values.size()) + " colour values for " +
+                       std::to_string(mesh.positions.size()) + " vertices");
 
   // One copy of a vertex per domain triangle that uses it.
   std::map<std::pair<int, int>, int> copy;
@@ -100,6 +137,7 @@ MeshExportReport write_gltf(const std::string& path, const Mesh& mesh, const Box
   m.asset.generator = o.generator;
   m.buffers.resize(1);
   tinygltf::Primitive prim;
+  tinygltf::Value color_extras;
   prim.mode = TINYGLTF_MODE_TRIANGLES;
   const double count = static_cast<double>(nv);
   prim.indices = add_accessor(m, indices, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR,
@@ -111,6 +149,37 @@ MeshExportReport write_gltf(const std::string& path, const Mesh& mesh, const Box
                                            static_cast<int>(nv), TINYGLTF_TARGET_ARRAY_BUFFER);
   prim.attributes["TEXCOORD_0"] = add_accessor(m, uv, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2,
                                                static_cast<int>(nv), TINYGLTF_TARGET_ARRAY_BUFFER, tmin, tmax);
+  if (!o.vertex_values.empty()) {
+    double top = o.color_scale_max;
+    if (!(top > 0)) {
+      top = 0;
+      for (float v : o.vertex_values)
+        if (std::isfinite(v)) top = std::max(top, double(v));
+      if (!(top > 0)) top = 1;
+    }
+    std::vector<float> rgb(3 * nv);
+    std::vector<double> cmin(3, 1e300), cmax(3, -1e300);
+    for (size_t i = 0; i < nv; ++i) {
+      const float v = o.vertex_values[source[i]];
+      const auto c = std::isfinite(v) ? heat_colour(v / top) : std::array<uint8_t, 3>{160, 160, 160};
+      for (int k = 0; k < 3; ++k) {
+        rgb[3 * i + k] = linear(c[k]);
+        cmin[k] = std::min(cmin[k], double(rgb[3 * i + k]));
+        cmax[k] = std::max(cmax[k], double(rgb[3 * i + k]));
+      }
+    }
+    prim.attributes["COLOR_0"] = add_accessor(m, rgb, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3,
+                                              static_cast<int>(nv), TINYGLTF_TARGET_ARRAY_BUFFER, cmin, cmax);
+    tinygltf::Value::Object scale;
+    scale["attribute"] = tinygltf::Value(std::string("COLOR_0"));
+    scale["quantity"] = tinygltf::Value(o.color_quantity);
+    scale["units"] = tinygltf::Value(o.units);
+    scale["blue"] = tinygltf::Value(0.0);
+    scale["red"] = tinygltf::Value(top);
+    tinygltf::Value::Object extras;
+    extras["tbs_color_scale"] = tinygltf::Value(scale);
+    color_extras = tinygltf::Value(extras);
+  }
   prim.attributes["_TRIANGLE_ID"] = add_accessor(m, triangle_id, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_SCALAR,
                                                  static_cast<int>(nv), TINYGLTF_TARGET_ARRAY_BUFFER, imin, imax);
   // indices are an index list: exact min/max over the data.
@@ -122,6 +191,7 @@ MeshExportReport write_gltf(const std::string& path, const Mesh& mesh, const Box
   }
   tinygltf::Mesh gm;
   gm.name = o.name;
+  gm.extras = color_extras;
   gm.primitives.push_back(prim);
   m.meshes.push_back(gm);
   tinygltf::Node node;
@@ -143,9 +213,27 @@ MeshExportReport write_gltf(const std::string& path, const Mesh& mesh, const Box
 
   std::ostringstream out;
   tinygltf::TinyGLTF writer;
-  if (!writer.WriteGltfSceneToStream(&m, out, false, ext == ".glb"))
+  if (ext == ".glb") {
+    if (!writer.WriteGltfSceneToStream(&m, out, false, true))
+      throw IoError(path + ": tinygltf could not serialise the mesh");
+    write_file_atomic(path, out.str());
+    return {nv, mesh.faces.size()};
+  }
+  // .gltf: the buffer goes to NAME.bin. tinygltf's stream writer embeds buffers, so the model
+  // is serialised without its data and the buffer entry pointed at the .bin afterwards.
+  const std::filesystem::path bin = std::filesystem::path(path).replace_extension(".bin");
+  std::vector<unsigned char> data;
+  data.swap(m.buffers[0].data);
+  if (!writer.WriteGltfSceneToStream(&m, out, true, false))
     throw IoError(path + ": tinygltf could not serialise the mesh");
-  write_file_atomic(path, out.str());
+  nlohmann::ordered_json doc = nlohmann::ordered_json::parse(out.str());
+  doc["buffers"][0] = {{"byteLength", data.size()}, {"uri", uri_of(bin.filename().string())}};
+  const std::string text = doc.dump(2) + "\n";
+  AtomicOutput bin_out(bin.string()), gltf_out(path);
+  put(bin_out.temp_path(), std::string_view(reinterpret_cast<const char*>(data.data()), data.size()), bin.string());
+  put(gltf_out.temp_path(), text, path);
+  bin_out.commit();
+  gltf_out.commit();
   return {nv, mesh.faces.size()};
 }
 

@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <csignal>
+#include <mutex>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -162,6 +164,18 @@ SplineFile parse_tbs(std::string_view text, const std::string& name, const ReadO
     out.metadata_json = it->dump();
   }
 
+  if (auto it = j.find("points"); it != j.end()) {
+    if (!it->is_object()) r.fail("points", std::string("expected an object, got ") + it->type_name());
+    const json& jp = r.array(r.field(*it, "positions", "points"), "points.positions");
+    const json& ju = r.array(r.field(*it, "parameters", "points"), "points.parameters", jp.size());
+    out.points.resize(jp.size());
+    out.point_parameters.resize(jp.size());
+    for (size_t i = 0; i < jp.size(); ++i) {
+      out.points[i] = r.point3(jp[i], idx("points.positions", i));
+      out.point_parameters[i] = r.point2(ju[i], idx("points.parameters", i));
+    }
+  }
+
   const json& dom = r.field(j, "domain", "");
   if (!dom.is_object()) r.fail("domain", "expected an object");
   const json& jv = r.array(r.field(dom, "vertices", "domain"), "domain.vertices");
@@ -310,6 +324,21 @@ std::string format_tbs(const SplineFile& f) {
   }
   j["control_point_map"] = std::move(map);
   j["metadata"] = std::move(meta);
+  if (f.points.size() != f.point_parameters.size())
+    throw InvalidInput(std::to_string(f.points.size()) + " points but " + std::to_string(f.point_parameters.size()) +
+                       " point parameters");
+  if (!f.points.empty()) {
+    json pos = json::array(), par = json::array();
+    for (size_t i = 0; i < f.points.size(); ++i) {
+      const Point3& p = f.points[i];
+      const Point2& u = f.point_parameters[i];
+      if (!p.allFinite() || !u.allFinite())
+        throw InvalidInput("point " + std::to_string(i) + " is not finite");
+      pos.push_back({p.x(), p.y(), p.z()});
+      par.push_back({u.x(), u.y()});
+    }
+    j["points"] = {{"positions", std::move(pos)}, {"parameters", std::move(par)}};
+  }
 
   std::string out;
   pretty(j, out, 0);
@@ -319,6 +348,61 @@ std::string format_tbs(const SplineFile& f) {
 
 void write_tbs(const std::string& path, const SplineFile& file) {
   write_file_atomic(path, format_tbs(file));
+}
+
+namespace {
+
+// Temporary files of live AtomicOutputs, for remove_pending_outputs(). Fixed buffers that are
+// never freed, so a signal handler can read them at any moment; a slot's state says whether
+// its path is complete (kLive). Outputs beyond kSlots, or with longer paths, are not
+// registered: an interrupt then leaves their temporary file (hidden, named .NAME.tmp-PID-N).
+constexpr int kSlots = 64;
+constexpr size_t kPathMax = 4096;
+constexpr int kFree = 0, kFilling = 1, kLive = 2;
+char g_temp_paths[kSlots][kPathMax];
+std::atomic<int> g_slot_state[kSlots];
+
+int register_temp(const std::string& temp) {
+  if (temp.size() >= kPathMax) return -1;
+  for (int i = 0; i < kSlots; ++i) {
+    int expected = kFree;
+    if (g_slot_state[i].compare_exchange_strong(expected, kFilling)) {
+      std::memcpy(g_temp_paths[i], temp.c_str(), temp.size() + 1);
+      g_slot_state[i].store(kLive);
+      return i;
+    }
+  }
+  return -1;
+}
+
+void unregister_temp(int slot) {
+  if (slot >= 0) g_slot_state[slot].store(kFree);
+}
+
+extern "C" void remove_and_reraise(int sig) {
+  remove_pending_outputs();
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+
+}  // namespace
+
+void remove_pending_outputs() noexcept {
+  for (int i = 0; i < kSlots; ++i)
+    if (g_slot_state[i].load() == kLive) ::unlink(g_temp_paths[i]);
+}
+
+void remove_outputs_on_signal() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+      struct sigaction sa {};
+      sa.sa_handler = remove_and_reraise;
+      sigemptyset(&sa.sa_mask);
+      sa.sa_flags = 0;
+      ::sigaction(sig, &sa, nullptr);
+    }
+  });
 }
 
 AtomicOutput::AtomicOutput(std::string path) : path_(std::move(path)) {
@@ -337,6 +421,7 @@ AtomicOutput::AtomicOutput(std::string path) : path_(std::move(path)) {
     if (fd >= 0) {
       ::close(fd);
       temp_ = candidate;
+      slot_ = register_temp(temp_);
       return;
     }
     if (errno != EEXIST)
@@ -347,12 +432,15 @@ AtomicOutput::AtomicOutput(std::string path) : path_(std::move(path)) {
 
 AtomicOutput::~AtomicOutput() {
   if (!committed_ && !temp_.empty()) std::remove(temp_.c_str());
+  unregister_temp(slot_);
 }
 
 void AtomicOutput::commit() {
   if (std::rename(temp_.c_str(), path_.c_str()) != 0)
     throw IoError("cannot write '" + path_ + "': " + std::strerror(errno));
   committed_ = true;
+  unregister_temp(slot_);
+  slot_ = -1;
 }
 
 void write_file_atomic(const std::string& path, std::string_view data) {

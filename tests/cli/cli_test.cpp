@@ -2,17 +2,22 @@
 
 #include <tbs/evaluator.h>
 #include <tbs/io.h>
+#include <tbs/scan.h>
 
 #include "random_spline.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <fcntl.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 namespace tbs {
 namespace {
@@ -304,6 +309,8 @@ TEST(CliConvert, WritesGltfMeshes) {
   EXPECT_EQ(read_file((dir / "m.glb").string()).substr(0, 4), "glTF");  // the GLB magic
   r = run("convert '" + small_spline().string() + "' '" + (dir / "m.gltf").string() + "' --resolution 2 -q");
   ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("buffer in m.bin"), std::string::npos) << r.out;
+  EXPECT_TRUE(fs::exists(dir / "m.bin"));
   r = run("convert '" + small_spline().string() + "' '" + (dir / "m.obj").string() + "' --resolution 2 -q");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("(OBJ)"), std::string::npos) << r.out;
@@ -337,6 +344,80 @@ TEST(CliConvert, ErrorMapOfTheFittedScan) {
   EXPECT_NE(r.err.find("add --points SCAN"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "none.exr"));
   EXPECT_FALSE(fs::exists(dir / "none.png"));
+}
+
+TEST(CliConvert, StoredPointsFeedErrorMapsAndHeatMaps) {
+  const fs::path dir = temp_dir();
+  const std::string scan = std::string(TBS_SOURCE_DIR) + "/samples/bracket.ply";
+  const fs::path spline = dir / "kept.tbs";
+  Result r = run("fit '" + scan + "' -o '" + spline.string() + "' --units mm --keep-points -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const SplineFile f = read_tbs(spline.string());
+  const Scan s = read_scan(scan);
+  EXPECT_EQ(f.points, s.positions);
+  ASSERT_EQ(f.point_parameters.size(), s.positions.size());
+  // The error map from the stored points is the one from the scan.
+  const json meta = json::parse(f.metadata_json);
+  char expected[64];
+  std::snprintf(expected, sizeof expected, "max error          %.4g mm", meta["fit"]["max_error_abs"].get<double>());
+  r = run("convert '" + spline.string() + "' '" + (dir / "kept.exr").string() + "' --width 32 -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("(stored points)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(expected), std::string::npos) << r.out;
+  // A heat map on the mesh.
+  r = run("convert '" + spline.string() + "' '" + (dir / "kept.gltf").string() + "' --color-by error --resolution 2 -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("COLOR_0: error 0 (blue)"), std::string::npos) << r.out;
+  EXPECT_NE(read_file((dir / "kept.gltf").string()).find("\"COLOR_0\""), std::string::npos);
+  EXPECT_TRUE(fs::exists(dir / "kept.bin"));
+  // Colours need glTF, and points.
+  r = run("convert '" + spline.string() + "' '" + (dir / "kept.obj").string() + "' --color-by error");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("needs a glTF output"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "kept.obj"));
+  r = run("convert '" + small_spline().string() + "' '" + (dir / "nopoints.glb").string() + "' --color-by error");
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("or fit with --keep-points"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "nopoints.glb"));
+}
+
+// Interrupted while writing a STEP file: the old file stays, no temporary file is left, and
+// the process ends by the signal.
+TEST(CliConvert, InterruptedWriteLeavesTheOldFile) {
+  const fs::path dir = temp_dir() / "interrupt";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path spline = dir / "b.tbs", out = dir / "b.step";
+  ASSERT_EQ(run("fit '" + std::string(TBS_SOURCE_DIR) + "/samples/bracket.ply' -o '" + spline.string() + "' -q").code, 0);
+  std::ofstream(out) << "old";
+  for (int sig : {SIGINT, SIGTERM}) {
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+      const int null = ::open("/dev/null", O_WRONLY);
+      ::dup2(null, 1);
+      ::execl(TBS_EXE, TBS_EXE, "convert", spline.c_str(), out.c_str(), "--cad-tolerance", "1e-5", "-q",
+              static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    // Wait for the hidden temporary file of the output to appear, then interrupt.
+    bool seen = false;
+    for (int i = 0; i < 60000 && !seen; ++i) {
+      for (const auto& e : fs::directory_iterator(dir))
+        if (e.path().filename().string().rfind(".b.step.tmp-", 0) == 0) seen = true;
+      if (!seen) ::usleep(1000);
+    }
+    ::kill(child, sig);
+    int status = 0;
+    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    ASSERT_TRUE(seen) << "the temporary file never appeared";
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << "status " << status;
+    EXPECT_EQ(read_file(out.string()), "old");
+    std::vector<std::string> left;
+    for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
+    std::sort(left.begin(), left.end());
+    EXPECT_EQ(left, (std::vector<std::string>{"b.step", "b.tbs"}));
+  }
 }
 
 TEST(CliFit, ExportsInTheSameCall) {

@@ -199,6 +199,44 @@ TEST(ErrorMap, ClosestPointDistanceIgnoresSlidingAlongTheSurface) {
   }
 }
 
+TEST(ErrorMap, ErrorAtReadsThePixelOrItsNearestMeasuredNeighbour) {
+  const Spline s = holed_spline(54);
+  const Synthetic syn = offset_points(s, 3000, 5);
+  const PointErrors e = point_errors(s, syn.points, syn.uv);
+  const ErrorMap m = make_error_map(s, syn.uv, e, {.width = 48});
+  // At a point's own parameter the map holds the largest error of its pixel: at least its own.
+  for (size_t i = 0; i < syn.uv.size(); ++i) {
+    const float v = error_at(m, syn.uv[i]);
+    ASSERT_TRUE(std::isfinite(v));
+    ASSERT_GE(v, static_cast<float>(e.distance[i]));
+    ASSERT_LE(v, static_cast<float>(e.stats.max));
+  }
+  // Every domain vertex, boundary and hole corners included, finds a value nearby.
+  for (const Point2& p : s.domain().vertices()) EXPECT_TRUE(std::isfinite(error_at(m, p))) << p.transpose();
+  // Far outside the rectangle it clamps to the border pixels.
+  const Box2 b = s.domain().bounding_box();
+  EXPECT_TRUE(std::isfinite(error_at(m, b.max + Point2(10, 10))));
+  // Without any pixel holding a value there is nothing to read.
+  ErrorMap empty = m;
+  std::fill(empty.mask.begin(), empty.mask.end(), PixelKind::Outside);
+  EXPECT_TRUE(std::isnan(error_at(empty, syn.uv[0])));
+  EXPECT_TRUE(std::isnan(error_at(ErrorMap{}, syn.uv[0])));
+}
+
+TEST(ErrorMap, HeatColourRunsFromBlueToRed) {
+  const auto lo = heat_colour(0.0), hi = heat_colour(1.0);
+  EXPECT_GT(lo[2], 200);
+  EXPECT_LT(lo[0], 50);
+  EXPECT_GT(hi[0], 200);
+  EXPECT_LT(hi[2], 50);
+  EXPECT_EQ(heat_colour(-3.0), lo);
+  EXPECT_EQ(heat_colour(7.0), hi);
+  EXPECT_EQ(heat_colour(std::nan("")), lo);
+  // Blue never rises along the scale; the upper quarter (yellow to red) is mostly red.
+  for (int i = 1; i <= 100; ++i) EXPECT_LE(heat_colour(0.01 * i)[2], heat_colour(0.01 * (i - 1))[2]) << i;
+  for (double t : {0.75, 0.9, 1.0}) EXPECT_GT(heat_colour(t)[0], 200) << t;
+}
+
 TEST(ErrorMap, RejectsBadSizes) {
   const Spline s = holed_spline(53);
   const Synthetic syn = offset_points(s, 10, 4);

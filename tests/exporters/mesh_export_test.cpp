@@ -1,6 +1,8 @@
 // glTF written by tbs read back with tinygltf: the tessellation's positions, normals,
 // parameters and triangle ids, with correct accessor bounds.
+#include <tbs/error_map.h>
 #include <tbs/errors.h>
+#include <tbs/io.h>
 #include <tbs/mesh_export.h>
 #include <tbs/scan.h>
 #include <tbs/tessellate.h>
@@ -10,7 +12,9 @@
 #include <gtest/gtest.h>
 #include <tiny_gltf.h>
 
+#include <cmath>
 #include <cstring>
+#include <limits>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -47,8 +51,17 @@ TEST_P(Gltf, ReadsBackAsTheTessellation) {
   std::string err, warn;
   const bool ok = GetParam() == ".glb" ? loader.LoadBinaryFromFile(&m, &err, &warn, file)
                                        : loader.LoadASCIIFromFile(&m, &err, &warn, file);
+  fs::path bin = file;
+  bin.replace_extension(".bin");
+  const bool has_bin = fs::exists(bin);
   fs::remove(file);
+  fs::remove(bin);
   ASSERT_TRUE(ok) << err;
+  // .glb holds its buffer; .gltf points to NAME.bin beside it.
+  EXPECT_EQ(has_bin, GetParam() == ".gltf");
+  ASSERT_EQ(m.buffers.size(), 1u);
+  EXPECT_EQ(m.buffers[0].uri, GetParam() == ".gltf" ? bin.filename().string() : std::string());
+  EXPECT_EQ(m.meshes.at(0).primitives.at(0).attributes.count("COLOR_0"), 0u);
   EXPECT_TRUE(warn.empty()) << warn;
   EXPECT_EQ(m.asset.generator, "tbs test");
   ASSERT_EQ(m.meshes.size(), 1u);
@@ -87,6 +100,58 @@ TEST_P(Gltf, ReadsBackAsTheTessellation) {
 
 INSTANTIATE_TEST_SUITE_P(Formats, Gltf, ::testing::Values(".glb", ".gltf"),
                          [](const auto& i) { return i.param == ".glb" ? "Glb" : "Gltf"; });
+
+TEST(Gltf, ColoursAreTheHeatScaleOfTheVertexValues) {
+  const Spline s = test::random_spline(2, test::GridOptions{}, 84);
+  const Mesh mesh = tessellate(s, {.resolution = 2});
+  GltfOptions o;
+  o.units = "mm";
+  o.color_scale_max = 2.0;
+  for (size_t v = 0; v < mesh.positions.size(); ++v)
+    o.vertex_values.push_back(v == 0 ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(v % 7) * 0.5f);
+  // A name that needs percent-encoding in the buffer's URI.
+  const fs::path file = fs::temp_directory_path() / ("tbs gltf #" + std::to_string(::getpid()) + ".gltf");
+  fs::path bin = file;
+  bin.replace_extension(".bin");
+  write_gltf(file, mesh, s.domain().bounding_box(), o);
+  tinygltf::TinyGLTF loader;
+  tinygltf::Model m;
+  std::string err, warn;
+  const bool ok = loader.LoadASCIIFromFile(&m, &err, &warn, file);
+  const std::string text = read_file(file.string());
+  fs::remove(file);
+  fs::remove(bin);
+  ASSERT_TRUE(ok) << err;
+  EXPECT_NE(text.find("\"uri\": \"tbs%20gltf%20%23"), std::string::npos);
+  const auto& prim = m.meshes[0].primitives[0];
+  ASSERT_EQ(prim.attributes.count("COLOR_0"), 1u);
+  const auto rgb = read_accessor<float>(m, prim.attributes.at("COLOR_0"), 3);
+  const auto idx = read_accessor<uint32_t>(m, prim.indices, 1);
+  auto linear = [](uint8_t c) {
+    const double x = c / 255.0;
+    return x <= 0.04045 ? x / 12.92 : std::pow((x + 0.055) / 1.055, 2.4);
+  };
+  for (size_t f = 0; f < mesh.faces.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t i = idx[3 * f + k];
+      const int v = mesh.faces[f][k];
+      const auto c = v == 0 ? std::array<uint8_t, 3>{160, 160, 160} : heat_colour(o.vertex_values[v] / 2.0);
+      for (int j = 0; j < 3; ++j) ASSERT_NEAR(rgb[3 * i + j], linear(c[j]), 1e-6) << "vertex " << v;
+    }
+  // Value 3 (v % 7 == 6) is above the scale: red, the scale's top.
+  const auto red = heat_colour(1.0);
+  EXPECT_EQ(heat_colour(1.5), red);
+  const auto& scale = m.meshes[0].extras.Get("tbs_color_scale");
+  ASSERT_TRUE(scale.IsObject());
+  EXPECT_EQ(scale.Get("red").GetNumberAsDouble(), 2.0);
+  EXPECT_EQ(scale.Get("units").Get<std::string>(), "mm");
+  EXPECT_EQ(scale.Get("attribute").Get<std::string>(), "COLOR_0");
+
+  o.vertex_values.pop_back();
+  EXPECT_THROW(write_gltf(file, mesh, s.domain().bounding_box(), o), InvalidInput);
+  EXPECT_FALSE(fs::exists(file));
+  EXPECT_FALSE(fs::exists(bin));
+}
 
 TEST(MeshSoup, ObjAndPlyReadBackWithTheSamePointsAndFaces) {
   const Spline s = test::random_spline(3, test::GridOptions{}, 83);

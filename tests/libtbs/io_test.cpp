@@ -5,12 +5,16 @@
 #include "random_spline.h"
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <nlohmann/json.hpp>
 
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 
 namespace tbs {
 namespace {
@@ -56,6 +60,28 @@ TEST(Io, WriteReadEvaluateIsBitIdentical) {
   }
 }
 
+TEST(Io, StoredPointsRoundTripExactly) {
+  SplineFile f = sample(2);
+  const auto uv = test::random_domain_points(f.spline.domain(), 50, 7);
+  const Evaluator ev(f.spline);
+  for (const auto& u : uv) {
+    f.points.push_back(ev.value(u) + Point3(1e-3 / 3, -2e-7, 0.1));
+    f.point_parameters.push_back(u);
+  }
+  const fs::path path = temp_dir() / "points.tbs";
+  write_tbs(path.string(), f);
+  const SplineFile g = read_tbs(path.string());
+  EXPECT_EQ(g.points, f.points);
+  EXPECT_EQ(g.point_parameters, f.point_parameters);
+  // Without points the field is not written; with mismatched sizes nothing is.
+  EXPECT_EQ(format_tbs(sample(2)).find("\"points\""), std::string::npos);
+  f.point_parameters.pop_back();
+  EXPECT_THROW(format_tbs(f), InvalidInput);
+  f.point_parameters.push_back(uv.back());
+  f.points[3].x() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(format_tbs(f), InvalidInput);
+}
+
 TEST(Io, AtomicOutputLeavesNothingBehindOnFailure) {
   const fs::path dir = temp_dir() / "atomic";
   fs::remove_all(dir);
@@ -71,6 +97,40 @@ TEST(Io, AtomicOutputLeavesNothingBehindOnFailure) {
   EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
   EXPECT_THROW(write_file_atomic((dir / "missing" / "x.tbs").string(), "x"), IoError);
   EXPECT_THROW(write_file_atomic(dir.string(), "x"), IoError);
+}
+
+// A process killed while writing leaves the earlier file as it was and no temporary file.
+TEST(Io, SignalsRemoveTemporaryFiles) {
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    const fs::path dir = temp_dir() / ("signal" + std::to_string(sig));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const fs::path target = dir / "x.step";
+    write_file_atomic(target.string(), "good");
+    int ready[2];
+    ASSERT_EQ(::pipe(ready), 0);
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+      remove_outputs_on_signal();
+      AtomicOutput a(target.string()), b((dir / "y.glb").string());
+      std::ofstream(a.temp_path()) << "partial";
+      std::ofstream(b.temp_path()) << "partial";
+      (void)!::write(ready[1], "r", 1);
+      for (;;) ::pause();
+    }
+    char c = 0;
+    ASSERT_EQ(::read(ready[0], &c, 1), 1);
+    ::close(ready[0]);
+    ::close(ready[1]);
+    EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 3);  // x.step + 2 temporaries
+    ::kill(child, sig);
+    int status = 0;
+    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << "status " << status;
+    EXPECT_EQ(read_file(target.string()), "good");
+    EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1) << "signal " << sig;
+  }
 }
 
 TEST(Io, ReadErrors) {
@@ -117,6 +177,10 @@ TEST(Io, RejectsMalformedFiles) {
       {"feature on the boundary", [](json& j) { j["domain"]["feature_edges"].push_back(j["domain"]["boundary_loops"][0][0]); j["domain"]["feature_edges"].back() = {j["domain"]["boundary_loops"][0][0], j["domain"]["boundary_loops"][0][1]}; }, "feature edge"},
       {"metadata not an object", [](json& j) { j["metadata"] = 3; }, "metadata"},
       {"top level array", [](json& j) { j = json::array({1, 2}); }, "expected a JSON object"},
+      {"points without parameters", [](json& j) { j["points"] = {{"positions", json::array({{1, 2, 3}})}}; }, "points.parameters: missing field"},
+      {"fewer parameters than points", [](json& j) { j["points"] = {{"positions", json::array({{1, 2, 3}, {4, 5, 6}})}, {"parameters", json::array({{0.1, 0.2}})}}; }, "points.parameters: expected 2 entries, got 1"},
+      {"point with two coordinates", [](json& j) { j["points"] = {{"positions", json::array({{1, 2}})}, {"parameters", json::array({{0.1, 0.2}})}}; }, "points.positions[0]: expected 3 entries"},
+      {"points not an object", [](json& j) { j["points"] = json::array(); }, "points: expected an object"},
   };
   for (const auto& c : cases) {
     json j = good;
@@ -177,6 +241,18 @@ TEST(Io, WrittenFilesMatchTheJsonSchema) {
       "jsonschema.validate(json.load(open(sys.argv[1])), json.load(open(sys.argv[2])))\" '" +
       path.string() + "' '" + schema + "' 2>&1";
   EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  // With stored points too.
+  {
+    SplineFile f = sample(3);
+    f.points = {Point3(1, 2, 3), Point3(4, 5, 6)};
+    f.point_parameters = {Point2(0.1, 0.2), Point2(0.3, 0.4)};
+    const fs::path with_points = temp_dir() / "schema_points.tbs";
+    write_tbs(with_points.string(), f);
+    const std::string c2 = "/usr/bin/python3 -c \"import json,sys,jsonschema; "
+                           "jsonschema.validate(json.load(open(sys.argv[1])), json.load(open(sys.argv[2])))\" '" +
+                           with_points.string() + "' '" + schema + "' 2>&1";
+    EXPECT_EQ(std::system(c2.c_str()), 0) << c2;
+  }
   // And rejects a file without control points.
   json j = json::parse(read_file(path.string()));
   j.erase("control_points");

@@ -5,6 +5,7 @@
 
 #include <tbs/spline.h>
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -98,5 +99,15 @@ struct ErrorMap {
 /// \throw InvalidInput if the sizes are out of range (1 to 16384 pixels a side) or differ.
 ErrorMap make_error_map(const Spline& spline, std::span<const Point2> uv, const PointErrors& errors,
                         const ErrorMapOptions& options = {});
+
+/// The map's `error` at parameter u: the value of the pixel containing u or, where that pixel
+/// holds no value (its centre is outside the domain, as for u on the boundary), of the nearest
+/// pixel within 3 pixels that does; NaN if there is none. u outside the map's rectangle is
+/// clamped to it.
+float error_at(const ErrorMap& map, const Point2& u);
+
+/// The colour scale of error previews: t = 0 blue, then cyan, green, yellow, t = 1 red (8-bit
+/// sRGB); t is clamped to [0, 1].
+std::array<uint8_t, 3> heat_colour(double t);
 
 }  // namespace tbs

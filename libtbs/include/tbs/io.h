@@ -6,6 +6,7 @@
 
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace tbs {
 
@@ -19,6 +20,10 @@ struct SplineFile {
   std::string units = "unitless";
   /// Free metadata (source, fit report): the text of a JSON object.
   std::string metadata_json = "{}";
+  /// Optional: the scanned points the spline was fitted to (`tbs fit --keep-points`), so that
+  /// error maps can be made from the .tbs alone. Empty, or as many as point_parameters.
+  std::vector<Point3> points = {};
+  std::vector<Point2> point_parameters = {};  ///< The parameter (u, v) of each point.
 };
 
 struct ReadOptions {
@@ -60,8 +65,20 @@ class AtomicOutput {
  private:
   std::string path_;
   std::string temp_;
+  int slot_ = -1;  // in the registry remove_pending_outputs() reads; -1 if not registered
   bool committed_ = false;
 };
+
+/// Makes SIGINT, SIGTERM and SIGHUP remove the temporary files of all live AtomicOutputs and
+/// then end the process as the signal would have (the default action is re-raised), so that
+/// an interrupted program leaves neither partial files nor temporaries. Meant for programs
+/// (the `tbs` command calls it first thing); a program with its own handlers can call
+/// remove_pending_outputs() from them instead. Idempotent.
+void remove_outputs_on_signal();
+
+/// Removes the temporary files of all live AtomicOutputs (the final files are untouched).
+/// Async-signal-safe: it only reads fixed buffers and calls unlink().
+void remove_pending_outputs() noexcept;
 
 /// Writes `data` to `path` through an AtomicOutput. \throw IoError.
 void write_file_atomic(const std::string& path, std::string_view data);
