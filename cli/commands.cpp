@@ -6,6 +6,7 @@
 #include <tbs/scan.h>
 #include <tbs/io.h>
 #include <tbs/knots.h>
+#include <tbs/parameterize.h>
 
 #include <nlohmann/json.hpp>
 
@@ -226,6 +227,137 @@ int run_eval(const EvalOptions& o) {
 
 namespace tbs::cli {
 
+namespace {
+
+// PATH with "-K" before its extension: out.tbs -> out-2.tbs.
+std::string numbered(const std::string& path, int k) {
+  namespace fs = std::filesystem;
+  const fs::path p(path);
+  return (p.parent_path() / (p.stem().string() + "-" + std::to_string(k) + p.extension().string())).string();
+}
+
+struct Say {
+  bool quiet, tty;
+  void operator()(const std::string& line) const {
+    if (quiet) return;
+    if (tty)
+      std::fprintf(stderr, "\r\033[K%s", line.c_str());
+    else
+      std::fprintf(stderr, "%s\n", line.c_str());
+    std::fflush(stderr);
+  }
+};
+
+void print_parameterization(const ParameterizeReport& p) {
+  std::printf("%-18s %s, %zu points%s; %s\n", "parameterized", p.input.c_str(), p.input_points,
+              p.input == "mesh" ? (", " + std::to_string(p.input_faces) + " faces").c_str()
+                                : (", reconstructed " + std::to_string(p.reconstructed_faces) + " faces").c_str(),
+              p.topology.describe().c_str());
+  std::string repairs;
+  auto add = [&](size_t n, const char* what) {
+    if (n) repairs += (repairs.empty() ? "" : ", ") + std::to_string(n) + " " + what;
+  };
+  add(p.vertices_merged, "duplicate vertices merged");
+  add(p.faces_removed, "degenerate or duplicate faces removed");
+  add(p.vertices_split, "non-manifold vertices split");
+  add(p.isolated_points, "unused vertices left out");
+  if (p.reoriented) repairs += (repairs.empty() ? "" : ", ") + std::string("faces reoriented");
+  if (!repairs.empty()) std::printf("%-18s %s\n", "mesh repairs", repairs.c_str());
+  std::printf("%-18s %d of %d: %zu vertices, %zu faces, %d boundary loop%s\n", "component", p.component,
+              p.topology.components, p.used.vertices, p.used.faces, p.used.boundary_loops,
+              p.used.boundary_loops == 1 ? "" : "s");
+  if (p.subdivisions)
+    std::printf("%-18s %d x 1-to-4: %zu points added on a smooth surface through the vertices (--min-points)\n",
+                "subdivided", p.subdivisions, p.points_added);
+  if (p.seam_edges) std::printf("%-18s closed surface cut open along %zu edges (a domain boundary now)\n", "seam", p.seam_edges);
+  std::printf("%-18s %s%s\n", "flattening", p.method.c_str(),
+              p.fallback_reason.empty() ? "" : (" (" + p.fallback_reason + ")").c_str());
+  std::printf("%-18s angle %.3f mean, %.3g max; area %.3f mean, %.3g max (1 = none)\n", "distortion",
+              p.distortion.angle_mean, p.distortion.angle_max, p.distortion.area_mean, p.distortion.area_max);
+  if (p.points_projected) std::printf("%-18s %zu (parameter of the closest mesh point)\n", "points projected", p.points_projected);
+  if (p.points_dropped) std::printf("%-18s %zu (other components, unused or merged vertices)\n", "points dropped", p.points_dropped);
+}
+
+// Fits one scan with parameters and writes the .tbs, the report and the exports.
+int fit_and_write(const FitCommandOptions& o, const Scan& scan, const ParameterizeReport* param,
+                  const std::string& output, const std::string& report, const std::vector<std::string>& exports,
+                  const Say& say, const std::string& points_file) {
+  namespace fs = std::filesystem;
+  FitOptions fo = o.fit;
+  fo.features = !o.no_features;
+  fo.progress = [&](const FitProgress& p) {
+    std::string line = "tbs fit: [" + p.stage + "] ";
+    if (say.tty && p.stage == "refine") {
+      // A bar toward the tolerance (log scale of the maximum error).
+      const int width = 20, done = static_cast<int>(std::lround(std::clamp(p.fraction, 0.0, 1.0) * width));
+      line += "[" + std::string(done, '#') + std::string(width - done, ' ') + "] ";
+    }
+    say(line + p.message);
+  };
+  const FitResult r = fit(scan, fo);
+  if (say.tty && !say.quiet) std::fprintf(stderr, "\n");
+
+  const FitReport& rep = r.report;
+  json meta;
+  meta["source"] = fs::path(o.input).filename().string();
+  meta["fit"] = json::parse(rep.to_json(false));
+  if (param) {
+    json pj = json::parse(param->to_json());
+    pj.erase("seconds");  // the .tbs stays reproducible
+    meta["parameterization"] = pj;
+  }
+  SplineFile file{r.spline, o.units, meta.dump()};
+  const bool keep = o.keep_points;
+  if (keep) {
+    file.points = scan.positions;
+    file.point_parameters = r.uv;
+  }
+  write_tbs(output, file);
+  if (!report.empty()) {
+    json full = json::parse(rep.to_json(true));
+    if (param) full["parameterization"] = json::parse(param->to_json());
+    write_file_atomic(report, full.dump(2) + "\n");
+  }
+
+  std::printf("%-18s %s\n", "input", o.input.c_str());
+  std::printf("%-18s %s\n", "output", output.c_str());
+  if (param) print_parameterization(*param);
+  std::printf("%-18s %zu\n", "points", rep.points);
+  if (rep.points_excluded > 0)
+    std::printf("%-18s %zu (outside the largest parameter region)\n", "points left out", rep.points_excluded);
+  std::printf("%-18s %d\n", "degree", rep.degree);
+  std::printf("%-18s %d\n", "domain triangles", rep.domain_triangles);
+  std::printf("%-18s %d\n", "control points", rep.control_points);
+  std::printf("%-18s %.3e (%.4g %s)\n", "max error", rep.max_error, rep.max_error_abs, o.units.c_str());
+  std::printf("%-18s %.3e (%.4g %s)\n", "RMS error", rep.rms_error, rep.rms_error_abs, o.units.c_str());
+  std::printf("%-18s %.3e (%.4g %s)\n", "tolerance", rep.tolerance, rep.tolerance_abs, o.units.c_str());
+  std::printf("%-18s %s (%s)\n", "converged", rep.converged ? "yes" : "no", rep.stop_reason.c_str());
+  std::printf("%-18s %.2f s\n", "time", rep.seconds + (param ? param->seconds : 0.0));
+  // --export: each file as `tbs convert OUT.tbs FILE` would write it (error maps from the scan
+  // or from the points kept in the .tbs).
+  for (const std::string& e : exports) {
+    ConvertOptions c;
+    c.input = output;
+    c.output = e;
+    if (param) {
+      // Computed parameters are not in the scan file: hand the points over directly.
+      c.point_positions = scan.positions;
+      c.point_uv = r.uv;
+    } else if (!keep) {
+      c.points = points_file;
+    }
+    c.threads = o.fit.threads;
+    c.quiet = o.quiet;
+    std::printf("\n");
+    std::fflush(stdout);
+    const int code = run_convert(c);
+    if (code != kOk) return code;
+  }
+  return kOk;
+}
+
+}  // namespace
+
 int run_fit(const FitCommandOptions& o) {
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -242,71 +374,49 @@ int run_fit(const FitCommandOptions& o) {
   for (const std::string& e : o.exports)
     if ((fs::exists(e, ec) && fs::equivalent(o.input, e, ec)) || fs::path(e) == fs::path(o.output))
       throw InvalidInput(e + ": an --export file would overwrite the scan or the .tbs; choose another path");
-  const bool tty = isatty(fileno(stderr)) != 0;
-  auto say = [&](const std::string& line) {
-    if (o.quiet) return;
-    if (tty)
-      std::fprintf(stderr, "\r\033[K%s", line.c_str());
-    else
-      std::fprintf(stderr, "%s\n", line.c_str());
-    std::fflush(stderr);
-  };
+  const Say say{o.quiet, isatty(fileno(stderr)) != 0};
 
   say("tbs fit: reading " + o.input);
   const Scan scan = read_scan(o.input);
-  FitOptions fo = o.fit;
-  fo.features = !o.no_features;
-  fo.progress = [&](const FitProgress& p) {
-    std::string line = "tbs fit: [" + p.stage + "] ";
-    if (tty && p.stage == "refine") {
-      // A bar toward the tolerance (log scale of the maximum error).
-      const int width = 20, done = static_cast<int>(std::lround(std::clamp(p.fraction, 0.0, 1.0) * width));
-      line += "[" + std::string(done, '#') + std::string(width - done, ' ') + "] ";
+  if (scan.has_uv()) {
+    if (o.component > 0 || o.all_components)
+      say("tbs fit: the scan has parameters (u, v); --component and --all-components apply only to scans without them");
+    return fit_and_write(o, scan, nullptr, o.output, o.report, o.exports, say, o.input);
+  }
+
+  // No parameters: flatten a mesh, or reconstruct and flatten a point cloud.
+  ParameterizeOptions po;
+  po.method = o.flatten == "lscm" ? FlattenMethod::Lscm : o.flatten == "mean-value" ? FlattenMethod::MeanValue : FlattenMethod::Auto;
+  po.progress = [&](const std::string& line) { say("tbs fit: [parameterize] " + line); };
+  po.component = o.component;
+  po.min_points = o.min_points;
+  po.sharp_angle = o.fit.feature_angle;
+  ParameterizedScan first = parameterize_scan(scan, po);
+  if (!o.all_components)
+    return fit_and_write(o, first.scan, &first.report, o.output, o.report, o.exports, say, o.input);
+
+  // Every component to its own files: OUT-K.tbs, REPORT-K.json, EXPORT-K.ext.
+  const int count = first.report.topology.components;
+  int failed = 0;
+  for (int k = 1; k <= count; ++k) {
+    std::vector<std::string> exports;
+    for (const auto& e : o.exports) exports.push_back(numbered(e, k));
+    say("tbs fit: component " + std::to_string(k) + " of " + std::to_string(count));
+    if (k > 1) std::printf("\n");
+    try {
+      po.component = k;
+      const ParameterizedScan p = k == 1 ? std::move(first) : parameterize_scan(scan, po);
+      const int code = fit_and_write(o, p.scan, &p.report, numbered(o.output, k),
+                                     o.report.empty() ? "" : numbered(o.report, k), exports, say, o.input);
+      if (code != kOk) return code;
+    } catch (const InvalidInput& e) {
+      // A component that cannot be fitted (too small, wrong topology) does not stop the others.
+      std::fprintf(stderr, "tbs: error: component %d: %s\n", k, e.what());
+      std::printf("%-18s component %d not fitted: %s\n", "skipped", k, e.what());
+      ++failed;
     }
-    say(line + p.message);
-  };
-  const FitResult r = fit(scan, fo);
-  if (tty && !o.quiet) std::fprintf(stderr, "\n");
-
-  const FitReport& rep = r.report;
-  json meta;
-  meta["source"] = fs::path(o.input).filename().string();
-  meta["fit"] = json::parse(rep.to_json(false));
-  SplineFile file{r.spline, o.units, meta.dump()};
-  if (o.keep_points) {
-    file.points = scan.positions;
-    file.point_parameters = r.uv;
   }
-  write_tbs(o.output, file);
-  if (!o.report.empty()) write_file_atomic(o.report, rep.to_json(true) + "\n");
-
-  std::printf("%-18s %s\n", "input", o.input.c_str());
-  std::printf("%-18s %s\n", "output", o.output.c_str());
-  std::printf("%-18s %zu\n", "points", rep.points);
-  if (rep.points_excluded > 0)
-    std::printf("%-18s %zu (outside the largest parameter region)\n", "points left out", rep.points_excluded);
-  std::printf("%-18s %d\n", "degree", rep.degree);
-  std::printf("%-18s %d\n", "domain triangles", rep.domain_triangles);
-  std::printf("%-18s %d\n", "control points", rep.control_points);
-  std::printf("%-18s %.3e (%.4g %s)\n", "max error", rep.max_error, rep.max_error_abs, o.units.c_str());
-  std::printf("%-18s %.3e (%.4g %s)\n", "RMS error", rep.rms_error, rep.rms_error_abs, o.units.c_str());
-  std::printf("%-18s %.3e (%.4g %s)\n", "tolerance", rep.tolerance, rep.tolerance_abs, o.units.c_str());
-  std::printf("%-18s %s (%s)\n", "converged", rep.converged ? "yes" : "no", rep.stop_reason.c_str());
-  std::printf("%-18s %.2f s\n", "time", rep.seconds);
-  // --export: each file as `tbs convert OUT.tbs FILE` would write it (error maps from the scan).
-  for (const std::string& e : o.exports) {
-    ConvertOptions c;
-    c.input = o.output;
-    c.output = e;
-    if (!o.keep_points) c.points = o.input;  // else the points stored in the .tbs
-    c.threads = o.fit.threads;
-    c.quiet = o.quiet;
-    std::printf("\n");
-    std::fflush(stdout);
-    const int code = run_convert(c);
-    if (code != kOk) return code;
-  }
-  return kOk;
+  return failed ? kInvalidInput : kOk;
 }
 
 }  // namespace tbs::cli

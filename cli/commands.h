@@ -38,6 +38,11 @@ struct FitCommandOptions {
   std::string units = "unitless";
   bool no_features = false;
   bool keep_points = false;  // store the points and their parameters in the .tbs
+  // Scans without parameters:
+  int component = 0;             // the mesh component to fit (1 = largest); 0: the largest
+  bool all_components = false;   // fit every component, to OUT-K.tbs
+  std::string flatten = "auto";  // auto, lscm or mean-value
+  size_t min_points = 20000;     // subdivide coarser meshes
   bool quiet = false;
   std::vector<std::string> exports;  // files to convert the result to, as `tbs convert` does
   FitOptions fit;  // the library's defaults are the command's defaults
@@ -57,7 +62,10 @@ struct ConvertOptions {
   std::string units;         // empty: the .tbs units (mm when unitless)
   std::string product_name;  // empty: the output's file name without extension
   std::string points;        // error maps and heat maps: the scan with parameters (empty: the .tbs's own)
-  std::string color_by = "none";  // meshes (glb, gltf): "error" adds a COLOR_0 heat map
+  std::string color_by = "none";
+  // Points given in memory (tbs fit --export with computed parameters), used before `points`.
+  std::vector<Point3> point_positions;
+  std::vector<Point2> point_uv;  // meshes (glb, gltf): "error" adds a COLOR_0 heat map
   int width = 512;           // error maps: pixels across u
   std::string measure = "parameter";
   int resolution = 0;        // meshes: uniform resolution; 0 = adaptive

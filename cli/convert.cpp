@@ -88,6 +88,12 @@ struct Points {
 Points points_for(const ConvertOptions& o, const SplineFile& file, const std::string& what,
                   const std::function<void(const std::string&)>& say) {
   Points p;
+  if (!o.point_positions.empty()) {
+    p.positions = o.point_positions;
+    p.uv = o.point_uv;
+    p.source = "the fitted points";
+    return p;
+  }
   if (o.points.empty()) {
     if (file.points.empty())
       throw InvalidInput(o.output + ": " + what + " needs the scanned points: add --points SCAN (the scan "

@@ -96,6 +96,22 @@ int main(int argc, char** argv) {
                                                    "does not depend on it")
       ->check(CLI::NonNegativeNumber);
   fit_cmd->add_flag("--quiet,-q", fit.quiet, "No progress messages on stderr");
+  fit_cmd->add_option("--component", fit.component,
+                      "Scans without (u, v): the mesh component to fit, 1 = the largest (default), "
+                      "numbered by decreasing face count")
+      ->check(CLI::PositiveNumber);
+  fit_cmd->add_flag("--all-components", fit.all_components,
+                    "Scans without (u, v): fit every component, each to its own files OUT-K.tbs "
+                    "(and REPORT-K.json, EXPORT-K.ext)");
+  fit_cmd->add_option("--flatten", fit.flatten,
+                      "Scans without (u, v): auto (LSCM, or mean-value coordinates if LSCM folds), "
+                      "lscm, or mean-value")
+      ->check(CLI::IsMember({"auto", "lscm", "mean-value"}))->capture_default_str();
+  fit_cmd->add_option("--min-points", fit.min_points,
+                      "Scans without (u, v): a mesh with fewer vertices is subdivided 1-to-4 (linearly, at "
+                      "most 4 times) until it has this many, so that its facets are fitted, not only its "
+                      "vertices; 0 = never")
+      ->capture_default_str();
   fit_cmd->add_flag("--keep-points", fit.keep_points,
                     "Store the points and their parameters in the .tbs, so that 'tbs convert' can make "
                     "error maps and heat maps without --points (the file grows by about 100 bytes a point)");

@@ -129,9 +129,9 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
   const std::string name = scan.source.empty() ? "<scan>" : scan.source;
   const size_t N = scan.positions.size();
   if (!scan.has_uv())
-    throw InvalidInput(name + ": this input has no parameters (u, v); give a PLY with u v (or s t, "
-                       "texture_u texture_v) properties, an OBJ with vt, or an .xyz with 5 or 8 "
-                       "columns (automatic parameterization is not available yet)");
+    throw InvalidInput(name + ": this input has no parameters (u, v); compute them with "
+                       "parameterize_scan() (the tbs command does so), or give a PLY with u v (or s t, "
+                       "texture_u texture_v) properties, an OBJ with vt, or an .xyz with 5 or 8 columns");
   if (scan.uv.size() != N) throw InvalidInput(name + ": " + std::to_string(scan.uv.size()) +
                                               " parameters for " + std::to_string(N) + " points");
   if (scan.has_normals() && scan.normals.size() != N)

@@ -1,0 +1,109 @@
+#pragma once
+/// \file
+/// Parameters (u, v) for scans that have none. A mesh is repaired, one connected component is
+/// chosen, a closed surface is cut open along a seam, and the result is flattened bijectively
+/// (free-boundary conformal, LSCM, with a fallback that cannot fold). A bare point cloud is
+/// first meshed by advancing-front reconstruction, and every point gets the parameter of its
+/// closest point on that mesh.
+
+#include <tbs/scan.h>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace tbs {
+
+/// Topology of a triangle mesh: chi = V - E + F = 2 (components) - 2 genus - boundary loops.
+struct MeshTopology {
+  size_t vertices = 0, edges = 0, faces = 0;
+  int components = 0;
+  int boundary_loops = 0;
+  int genus = 0;  ///< summed over the components
+  /// For example "1 component, 2 boundary loops, genus 0".
+  std::string describe() const;
+};
+
+/// The topology of a triangle mesh. \pre indices in range; the mesh is treated as given
+/// (non-manifold edges count once per distinct vertex pair).
+MeshTopology mesh_topology(size_t vertex_count, const std::vector<std::array<int, 3>>& triangles);
+
+enum class FlattenMethod {
+  /// LSCM; if it folds (a triangle flipped, or the boundary crossing itself), mean-value
+  /// coordinates with the outer boundary on a circle, which cannot fold.
+  Auto,
+  Lscm,       ///< LSCM only: an error if it folds
+  MeanValue,  ///< mean-value coordinates, circular outer boundary (holes filled while solving)
+};
+
+struct ParameterizeOptions {
+  FlattenMethod method = FlattenMethod::Auto;
+  /// The connected component to flatten, numbered from 1 by decreasing face count; 0 is the
+  /// largest (the same as 1).
+  int component = 0;
+  /// A closed surface of genus 0 is cut open along a seam (a shortest path between two far
+  /// apart vertices), which becomes a boundary of the parameter domain; false refuses it.
+  bool cut_closed = true;
+  /// Meshes with fewer vertices are refined by 1-to-4 subdivision until they have at least this
+  /// many (at most 4 times), so that the fit has more than the vertices to go by: the new
+  /// points lie on a smooth surface through the old ones (PN triangles from crease-aware
+  /// normals; edges where the faces' normals turn by more than `sharp_angle` stay straight),
+  /// their parameters are the midpoints in (u, v). 0: never.
+  size_t min_points = 0;
+  double sharp_angle = 40;  ///< degrees; see min_points
+  /// Called between steps with a line for a person. May be empty.
+  std::function<void(const std::string&)> progress;
+};
+
+/// Distortion of the flattening, per triangle, weighted by the triangles' 3D areas. With
+/// s1 >= s2 the singular values of the map from a triangle to its (u, v) image (after scaling
+/// the whole parameterization to the surface's area): angle distortion s1 / s2 (1 for a
+/// conformal map), area distortion max(s1 s2, 1 / (s1 s2)) (1 where areas are kept).
+struct Distortion {
+  double angle_mean = 1, angle_max = 1;
+  double area_mean = 1, area_max = 1;
+};
+
+struct ParameterizeReport {
+  std::string input;                   ///< "mesh" or "point cloud"
+  size_t input_points = 0, input_faces = 0;
+  size_t reconstructed_faces = 0;      ///< point clouds: faces of the reconstructed mesh
+  size_t vertices_merged = 0;          ///< duplicate vertices merged
+  size_t faces_removed = 0;            ///< degenerate (repeated-corner, zero-area) and duplicate faces
+  size_t vertices_split = 0;           ///< copies made to repair non-manifold vertices and edges
+  bool reoriented = false;             ///< faces were flipped to a consistent orientation
+  size_t isolated_points = 0;          ///< mesh vertices used by no face (left out)
+  MeshTopology topology;               ///< of the repaired mesh, all components
+  int component = 1;                   ///< the component flattened (1 = largest)
+  MeshTopology used;                   ///< of that component (before any seam cut)
+  size_t seam_edges = 0;               ///< a closed surface was cut open along this many edges
+  std::string method;                  ///< "LSCM" or "mean value (circular boundary)"
+  std::string fallback_reason;         ///< why LSCM was not kept; empty if it was
+  Distortion distortion;
+  size_t points_projected = 0;         ///< point clouds: points given the parameter of their closest mesh point
+  size_t points_dropped = 0;           ///< points of other components, or not on the mesh
+  int subdivisions = 0;                ///< 1-to-4 subdivisions of a coarse mesh (min_points)
+  size_t points_added = 0;             ///< points those made
+  double seconds = 0;
+  /// The report as a JSON object (text).
+  std::string to_json() const;
+};
+
+struct ParameterizedScan {
+  /// The scan with parameters: for a mesh its chosen component's vertices (a vertex on a seam
+  /// appears twice, once per side) and faces; for a point cloud its points without faces.
+  Scan scan;
+  /// The input point of each output point (an index into the input scan's positions).
+  std::vector<size_t> source;
+  ParameterizeReport report;
+};
+
+/// Computes parameters for a scan without them: a mesh (scan.triangles non-empty) or a point
+/// cloud. Normals of the input are carried to the output.
+/// \throw InvalidInput naming the scan and what was found (components, boundary loops,
+///   genus) if the chosen component is not a disk, possibly with holes, or a closed genus-0
+///   surface (with cut_closed); if the component does not exist; if the reconstruction yields
+///   no surface; or if no method gives a bijective map.
+ParameterizedScan parameterize_scan(const Scan& scan, const ParameterizeOptions& options = {});
+
+}  // namespace tbs
