@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <functional>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -279,9 +280,13 @@ void print_parameterization(const ParameterizeReport& p) {
 }
 
 // Fits one scan with parameters and writes the .tbs, the report and the exports.
-int fit_and_write(const FitCommandOptions& o, const Scan& scan, const ParameterizeReport* param,
-                  const std::string& output, const std::string& report, const std::vector<std::string>& exports,
-                  const Say& say, const std::string& points_file) {
+// Fits one scan with parameters and writes the .tbs, the report and the exports. A flattened
+// coarse mesh whose vertices alone cannot be fitted within the control-point budget is
+// subdivided (`densify`, which replaces *pscan) and fitted again.
+int fit_and_write(const FitCommandOptions& o, ParameterizedScan* pscan, const Scan* plain,
+                  const std::function<bool(ParameterizedScan&)>& densify, const std::string& output,
+                  const std::string& report, const std::vector<std::string>& exports, const Say& say,
+                  const std::string& points_file) {
   namespace fs = std::filesystem;
   FitOptions fo = o.fit;
   fo.features = !o.no_features;
@@ -294,8 +299,16 @@ int fit_and_write(const FitCommandOptions& o, const Scan& scan, const Parameteri
     }
     say(line + p.message);
   };
-  const FitResult r = fit(scan, fo);
+  FitResult r = fit(pscan ? pscan->scan : *plain, fo);
+  if (pscan && !r.report.converged && r.report.stop_reason.find("budget") != std::string::npos && densify &&
+      densify(*pscan)) {
+    say("tbs fit: the vertices alone did not reach the tolerance within the control-point budget; fitting the "
+        "subdivided mesh (" + std::to_string(pscan->scan.positions.size()) + " points)");
+    r = fit(pscan->scan, fo);
+  }
   if (say.tty && !say.quiet) std::fprintf(stderr, "\n");
+  const Scan& scan = pscan ? pscan->scan : *plain;
+  const ParameterizeReport* param = pscan ? &pscan->report : nullptr;
 
   const FitReport& rep = r.report;
   json meta;
@@ -381,7 +394,7 @@ int run_fit(const FitCommandOptions& o) {
   if (scan.has_uv()) {
     if (o.component > 0 || o.all_components)
       say("tbs fit: the scan has parameters (u, v); --component and --all-components apply only to scans without them");
-    return fit_and_write(o, scan, nullptr, o.output, o.report, o.exports, say, o.input);
+    return fit_and_write(o, nullptr, &scan, nullptr, o.output, o.report, o.exports, say, o.input);
   }
 
   // No parameters: flatten a mesh, or reconstruct and flatten a point cloud.
@@ -389,11 +402,19 @@ int run_fit(const FitCommandOptions& o) {
   po.method = o.flatten == "lscm" ? FlattenMethod::Lscm : o.flatten == "mean-value" ? FlattenMethod::MeanValue : FlattenMethod::Auto;
   po.progress = [&](const std::string& line) { say("tbs fit: [parameterize] " + line); };
   po.component = o.component;
-  po.min_points = o.min_points;
   po.sharp_angle = o.fit.feature_angle;
+  // Vertices first; a coarse mesh is subdivided only if they are not enough (see fit_and_write).
+  auto densify = [&](ParameterizedScan& p) {
+    if (p.report.input != "mesh" || o.min_points == 0 || p.report.used.vertices >= o.min_points) return false;
+    ParameterizeOptions dense = po;
+    dense.component = p.report.component;
+    dense.min_points = o.min_points;
+    p = parameterize_scan(scan, dense);
+    return p.report.subdivisions > 0;
+  };
   ParameterizedScan first = parameterize_scan(scan, po);
   if (!o.all_components)
-    return fit_and_write(o, first.scan, &first.report, o.output, o.report, o.exports, say, o.input);
+    return fit_and_write(o, &first, nullptr, densify, o.output, o.report, o.exports, say, o.input);
 
   // Every component to its own files: OUT-K.tbs, REPORT-K.json, EXPORT-K.ext.
   const int count = first.report.topology.components;
@@ -405,8 +426,8 @@ int run_fit(const FitCommandOptions& o) {
     if (k > 1) std::printf("\n");
     try {
       po.component = k;
-      const ParameterizedScan p = k == 1 ? std::move(first) : parameterize_scan(scan, po);
-      const int code = fit_and_write(o, p.scan, &p.report, numbered(o.output, k),
+      ParameterizedScan p = k == 1 ? std::move(first) : parameterize_scan(scan, po);
+      const int code = fit_and_write(o, &p, nullptr, densify, numbered(o.output, k),
                                      o.report.empty() ? "" : numbered(o.report, k), exports, say, o.input);
       if (code != kOk) return code;
     } catch (const InvalidInput& e) {

@@ -42,7 +42,7 @@ struct FitCommandOptions {
   int component = 0;             // the mesh component to fit (1 = largest); 0: the largest
   bool all_components = false;   // fit every component, to OUT-K.tbs
   std::string flatten = "auto";  // auto, lscm or mean-value
-  size_t min_points = 20000;     // subdivide coarser meshes
+  size_t min_points = 5000;      // subdivide coarser meshes when their vertices are not enough
   bool quiet = false;
   std::vector<std::string> exports;  // files to convert the result to, as `tbs convert` does
   FitOptions fit;  // the library's defaults are the command's defaults

@@ -26,8 +26,9 @@ int main(int argc, char** argv) {
   // output, and end as the signal says (exit status 128 + signal in a shell).
   tbs::remove_outputs_on_signal();
   CLI::App app{"tbs " TBS_VERSION ": triangular B-spline (DMS spline) surfaces from 3D scans, "
-               "for CAD.\nThis version fits splines to scans whose points carry parameters (u, v), "
-               "inspects and evaluates .tbs splines, and converts them to STEP, IGES and glTF.\n"
+               "for CAD.\nThis version fits splines to scans (with parameters (u, v), or raw meshes and "
+               "point clouds, which it flattens first), inspects and evaluates .tbs splines, and "
+               "converts them to STEP, IGES, glTF, OBJ, PLY and OpenEXR error maps.\n"
                "Exit codes: 0 ok, 2 bad usage, 3 invalid input, 4 file I/O error, 5 internal error."};
   app.set_version_flag("--version", "tbs " TBS_VERSION);
   app.require_subcommand(1);
@@ -53,10 +54,13 @@ int main(int argc, char** argv) {
 
   FitCommandOptions fit;
   auto* fit_cmd = app.add_subcommand(
-      "fit", "Fit one triangular B-spline to a scan with parameters (u, v) until the maximum "
-             "error is within the tolerance, and write it as .tbs. Inputs: PLY (ASCII or binary; "
+      "fit", "Fit one triangular B-spline to a scan until the maximum error is within the "
+             "tolerance, and write it as .tbs. Inputs with parameters: PLY (ASCII or binary; "
              "vertex u v, s t or texture_u texture_v), OBJ (vt), XYZ/TXT with 5 or 8 columns "
-             "(x y z u v [nx ny nz]). Prints a summary table on stdout, progress on stderr.");
+             "(x y z u v [nx ny nz]). Without parameters (meshes: PLY, OBJ, OFF, STL; point clouds: "
+             "PLY, XYZ with 3 or 6 columns) the scan is repaired, meshed if it is a point cloud, cut "
+             "open if closed, and flattened first (docs/fit.md). Prints a summary table on stdout, "
+             "progress on stderr.");
   fit_cmd->add_option("input", fit.input, "The scan")->required();
   fit_cmd->add_option("-o,--output", fit.output, "The .tbs file to write")->required();
   fit_cmd->add_option("--degree", fit.fit.degree, "Polynomial degree n (C^(n-1) where smooth)")
@@ -108,9 +112,10 @@ int main(int argc, char** argv) {
                       "lscm, or mean-value")
       ->check(CLI::IsMember({"auto", "lscm", "mean-value"}))->capture_default_str();
   fit_cmd->add_option("--min-points", fit.min_points,
-                      "Scans without (u, v): a mesh with fewer vertices is subdivided 1-to-4 (linearly, at "
-                      "most 4 times) until it has this many, so that its facets are fitted, not only its "
-                      "vertices; 0 = never")
+                      "Scans without (u, v): when a mesh's vertices alone do not reach the tolerance within "
+                      "the control-point budget and it has fewer vertices than this, it is subdivided 1-to-4 "
+                      "(new points on a smooth surface through the vertices) until it has this many, and "
+                      "fitted again; 0 = never")
       ->capture_default_str();
   fit_cmd->add_flag("--keep-points", fit.keep_points,
                     "Store the points and their parameters in the .tbs, so that 'tbs convert' can make "

@@ -14,7 +14,10 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <map>
 #include <sstream>
+#include <cmath>
 #include <fcntl.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -226,16 +229,130 @@ TEST(CliFit, SameBytesForAnyThreadCount) {
   EXPECT_EQ(read_file(a.string()), read_file(b.string()));
 }
 
-TEST(CliFit, InputWithoutParametersIsRefused) {
+// An OFF mesh without parameters: an n x n grid over [0, 1]^2 lifted to a gentle saddle,
+// shifted by `dx`, with the cells for which `hole` is true left out.
+std::string off_grid(int n, double dx, const std::function<bool(int, int)>& hole, int* vertices = nullptr) {
+  std::ostringstream v, f;
+  int nv = 0, nf = 0;
+  std::map<int, int> id;
+  auto vertex = [&](int i, int j) {
+    const auto [it, added] = id.try_emplace(j * (n + 1) + i, nv);
+    if (added) {
+      const double x = double(i) / n, y = double(j) / n;
+      v << x + dx << " " << y << " " << 0.3 * (x * x - y * y) << "\n";
+      ++nv;
+    }
+    return it->second;
+  };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      if (hole(i, j)) continue;
+      const int a = vertex(i, j), b = vertex(i + 1, j), c = vertex(i + 1, j + 1), d = vertex(i, j + 1);
+      f << "3 " << a << " " << b << " " << c << "\n3 " << a << " " << c << " " << d << "\n";
+      nf += 2;
+    }
+  if (vertices) *vertices = nv;
+  return "OFF\n" + std::to_string(nv) + " " + std::to_string(nf) + " 0\n" + v.str() + f.str();
+}
+
+TEST(CliFit, MeshWithoutParametersIsFlattenedAndFitted) {
   const fs::path dir = temp_dir();
-  const fs::path in = dir / "plain.xyz", out = dir / "plain.tbs";
+  const fs::path in = dir / "holes.off", out = dir / "holes.tbs", report = dir / "holes.json";
+  std::ofstream(in) << off_grid(30, 0, [](int i, int j) { return (i >= 5 && i < 10 && j >= 5 && j < 10) || (i >= 18 && i < 24 && j >= 12 && j < 20); });
+  Result r = run("fit '" + in.string() + "' -o '" + out.string() + "' --report '" + report.string() + "' -q --export '" +
+                 (dir / "holes.exr").string() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("parameterized      mesh, 910 points"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("component          1 of 1: 910 vertices, 1654 faces, 3 boundary loops"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("flattening         LSCM"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("subdivided"), std::string::npos) << r.out;  // the vertices suffice
+  EXPECT_NE(r.out.find("converged          yes"), std::string::npos) << r.out;
+  // The error map of an --export comes from the fitted points (the scan has no parameters).
+  EXPECT_NE(r.out.find("from the fitted points"), std::string::npos) << r.out;
+  EXPECT_TRUE(fs::exists(dir / "holes.exr"));
+  const json rep = json::parse(read_file(report.string()));
+  EXPECT_EQ(rep["parameterization"]["method"], "LSCM");
+  EXPECT_EQ(rep["parameterization"]["component_topology"]["boundary_loops"], 3);
+  EXPECT_EQ(rep["holes"], 2);  // the domain keeps the holes
+  const json meta = json::parse(read_tbs(out.string()).metadata_json);
+  EXPECT_EQ(meta["parameterization"]["input"], "mesh");
+  EXPECT_NE(r.out.find("points             910"), std::string::npos) << r.out;
+  // When the vertices are not enough within the control-point budget, the mesh is subdivided
+  // and fitted again; --min-points 0 never subdivides.
+  r = run("fit '" + in.string() + "' -o '" + out.string() + "' --tolerance 1e-6 --max-control-points 300 -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("subdivided         2 x 1-to-4"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("points             13567"), std::string::npos) << r.out;
+  r = run("fit '" + in.string() + "' -o '" + out.string() + "' --tolerance 1e-6 --max-control-points 300 --min-points 0 -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.out.find("subdivided"), std::string::npos) << r.out;
+}
+
+TEST(CliFit, ComponentsOneOrAll) {
+  const fs::path dir = temp_dir();
+  const fs::path in = dir / "two.off";
+  int big = 0, small = 0;
+  const std::string a = off_grid(12, 0, [](int, int) { return false; }, &big);
+  const std::string b = off_grid(6, 3, [](int, int) { return false; }, &small);
+  // Concatenate the two OFF bodies.
+  auto body = [](const std::string& off, int& nv, int& nf, std::string& verts, std::string& faces) {
+    std::istringstream s(off);
+    std::string line;
+    std::getline(s, line);
+    s >> nv >> nf;
+    std::getline(s, line);  // the rest of the counts line
+    for (int i = 0; i < nv; ++i) std::getline(s, line), verts += line + "\n";
+    for (int i = 0; i < nf; ++i) std::getline(s, line), faces += line + "\n";
+  };
+  int nva, nfa, nvb, nfb;
+  std::string va, fa, vb, fb;
+  body(a, nva, nfa, va, fa);
+  body(b, nvb, nfb, vb, fb);
+  std::string shifted;
+  std::istringstream fs_b(fb);
+  for (std::string line; std::getline(fs_b, line);) {
+    std::istringstream l(line);
+    int k, x, y, z;
+    l >> k >> x >> y >> z;
+    shifted += "3 " + std::to_string(x + nva) + " " + std::to_string(y + nva) + " " + std::to_string(z + nva) + "\n";
+  }
+  std::ofstream(in) << "OFF\n" << nva + nvb << " " << nfa + nfb << " 0\n" << va << vb << fa << shifted;
+  Result r = run("fit '" + in.string() + "' -o '" + (dir / "two.tbs").string() + "' --component 2 --min-points 0 -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("component          2 of 2: " + std::to_string(small) + " vertices"), std::string::npos) << r.out;
+  r = run("fit '" + in.string() + "' -o '" + (dir / "two.tbs").string() + "' --component 3 -q");
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("there is no component 3"), std::string::npos) << r.err;
+  r = run("fit '" + in.string() + "' -o '" + (dir / "all.tbs").string() + "' --all-components --min-points 0 -q --export '" +
+          (dir / "all.glb").string() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const char* f : {"all-1.tbs", "all-2.tbs", "all-1.glb", "all-2.glb"}) EXPECT_TRUE(fs::exists(dir / f)) << f;
+  EXPECT_FALSE(fs::exists(dir / "all.tbs"));
+  EXPECT_EQ(read_tbs((dir / "all-1.tbs").string()).points.size(), 0u);
+  EXPECT_NE(r.out.find("component          1 of 2: " + std::to_string(big) + " vertices"), std::string::npos) << r.out;
+}
+
+TEST(CliFit, HigherGenusIsRefusedWithItsTopology) {
+  const fs::path dir = temp_dir();
+  const fs::path in = dir / "torus.off", out = dir / "torus.tbs";
   {
+    const int n = 10;
     std::ofstream f(in);
-    for (int i = 0; i < 20; ++i) f << i << " " << i * i % 7 << " " << i % 3 << "\n";
+    f << "OFF\n" << n * n << " " << 2 * n * n << " 0\n";
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const double a = 2 * M_PI * i / n, b = 2 * M_PI * j / n;
+        f << (2 + std::cos(b)) * std::cos(a) << " " << (2 + std::cos(b)) * std::sin(a) << " " << std::sin(b) << "\n";
+      }
+    auto id = [&](int i, int j) { return (j % n) * n + (i % n); };
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i)
+        f << "3 " << id(i, j) << " " << id(i + 1, j) << " " << id(i + 1, j + 1) << "\n3 " << id(i, j) << " "
+          << id(i + 1, j + 1) << " " << id(i, j + 1) << "\n";
   }
   const Result r = run("fit '" + in.string() + "' -o '" + out.string() + "'");
   EXPECT_EQ(r.code, 3);
-  EXPECT_NE(r.err.find("plain.xyz: this input has no parameters"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("torus.off: component 1 of 1 has 100 vertices, 0 boundary loops, genus 1"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(out));
 }
 

@@ -360,6 +360,15 @@ TEST(Parameterize, CgalDemoMeshes) {
     }
     EXPECT_EQ(p.report.seam_edges > 0, c.loops == 0);
   }
+  // The radar dish's reconstruction folds under LSCM: the default falls back to mean-value
+  // coordinates and says why; LSCM alone refuses.
+  const Scan radar = read_scan((dir / "data/points_3/radar.xyz").string());
+  const ParameterizedScan p = parameterize_scan(radar);
+  EXPECT_EQ(p.report.method, "mean value (circular boundary)");
+  EXPECT_NE(p.report.fallback_reason.find("LSCM folds"), std::string::npos) << p.report.fallback_reason;
+  ParameterizeOptions o;
+  o.method = FlattenMethod::Lscm;
+  EXPECT_THROW(parameterize_scan(radar, o), InvalidInput);
 }
 
 }  // namespace
