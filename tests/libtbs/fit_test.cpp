@@ -7,6 +7,8 @@
 #include <tbs/knots.h>
 #include <tbs/scan.h>
 
+#include "cgal_demo_data.h"
+
 #include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
@@ -393,12 +395,9 @@ TEST(Fit, DeterministicForAnyThreadCount) {
 // Real data: CGAL's mesh_with_border.off, parameterized in the test by projection on its
 // best-fitting plane.
 TEST(Fit, RealMeshWithBorder) {
-  const std::string tarball = "/usr/share/doc/libcgal-dev/data.tar.gz";
-  if (!std::filesystem::exists(tarball)) GTEST_SKIP() << "libcgal-demo is not installed";
-  const auto dir = std::filesystem::temp_directory_path() / "tbs_fit_test_data";
-  std::filesystem::create_directories(dir);
-  const std::string cmd = "tar xzf " + tarball + " -C " + dir.string() + " data/meshes/mesh_with_border.off";
-  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  const auto data = test::cgal_demo_data("tbs_fit_test_data", "data/meshes/mesh_with_border.off");
+  if (!data) GTEST_SKIP() << "libcgal-demo is not installed";
+  const std::filesystem::path dir = *data;
   Scan s = read_scan((dir / "data/meshes/mesh_with_border.off").string());
   Point3 c = Point3::Zero();
   for (const auto& p : s.positions) c += p;

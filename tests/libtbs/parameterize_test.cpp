@@ -6,6 +6,8 @@
 #include <tbs/predicates.h>
 #include <tbs/scan.h>
 
+#include "cgal_demo_data.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -329,12 +331,9 @@ TEST(Parameterize, RefusesTooLittle) {
 // The meshes of the issue, from Debian's libcgal-demo: every one is flattened bijectively (the
 // closed one cut open along a seam) or refused for its topology.
 TEST(Parameterize, CgalDemoMeshes) {
-  const std::string tarball = "/usr/share/doc/libcgal-dev/data.tar.gz";
-  if (!std::filesystem::exists(tarball)) GTEST_SKIP() << "libcgal-demo is not installed";
-  const auto dir = std::filesystem::temp_directory_path() / "tbs_parameterize_test_data";
-  std::filesystem::create_directories(dir);
-  const std::string cmd = "tar xzf " + tarball + " -C " + dir.string() + " data/meshes data/points_3/radar.xyz";
-  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  const auto data = test::cgal_demo_data("tbs_parameterize_test_data", "data/meshes data/points_3/radar.xyz");
+  if (!data) GTEST_SKIP() << "libcgal-demo is not installed";
+  const std::filesystem::path dir = *data;
   struct Case {
     std::string file;
     int components, loops, genus;
