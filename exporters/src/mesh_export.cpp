@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <cmath>
 #include <map>
 #include <sstream>
@@ -43,14 +42,6 @@ int add_accessor(tinygltf::Model& m, const std::vector<T>& data, int component_t
   acc.maxValues = std::move(max);
   m.accessors.push_back(acc);
   return static_cast<int>(m.accessors.size()) - 1;
-}
-
-// Writes a temporary file of an AtomicOutput. \throw IoError naming `path`.
-void put(const std::string& temp, std::string_view data, const std::string& path) {
-  std::ofstream f(temp, std::ios::binary | std::ios::trunc);
-  f.write(data.data(), static_cast<std::streamsize>(data.size()));
-  f.flush();
-  if (!f) throw IoError("cannot write '" + path + "': write failed (disk full?)");
 }
 
 // 8-bit sRGB to the linear values glTF colours are.
@@ -230,8 +221,8 @@ MeshExportReport write_gltf(const std::string& path, const Mesh& mesh, const Box
   doc["buffers"][0] = {{"byteLength", data.size()}, {"uri", uri_of(bin.filename().string())}};
   const std::string text = doc.dump(2) + "\n";
   AtomicOutput bin_out(bin.string()), gltf_out(path);
-  put(bin_out.temp_path(), std::string_view(reinterpret_cast<const char*>(data.data()), data.size()), bin.string());
-  put(gltf_out.temp_path(), text, path);
+  bin_out.write(std::string_view(reinterpret_cast<const char*>(data.data()), data.size()));
+  gltf_out.write(text);
   bin_out.commit();
   gltf_out.commit();
   return {nv, mesh.faces.size()};

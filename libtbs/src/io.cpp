@@ -443,14 +443,16 @@ void AtomicOutput::commit() {
   slot_ = -1;
 }
 
+void AtomicOutput::write(std::string_view data) {
+  std::ofstream f(temp_, std::ios::binary | std::ios::trunc);
+  f.write(data.data(), static_cast<std::streamsize>(data.size()));
+  f.flush();
+  if (!f) throw IoError("cannot write '" + path_ + "': write failed (disk full?)");
+}
+
 void write_file_atomic(const std::string& path, std::string_view data) {
   AtomicOutput out(path);
-  {
-    std::ofstream f(out.temp_path(), std::ios::binary | std::ios::trunc);
-    f.write(data.data(), static_cast<std::streamsize>(data.size()));
-    f.flush();
-    if (!f) throw IoError("cannot write '" + path + "': write failed (disk full?)");
-  }
+  out.write(data);
   out.commit();
 }
 

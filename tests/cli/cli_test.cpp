@@ -441,7 +441,7 @@ TEST(CliConvert, WritesGltfMeshes) {
 
 TEST(CliConvert, ErrorMapOfTheFittedScan) {
   const fs::path dir = temp_dir();
-  const std::string scan = std::string(TBS_SOURCE_DIR) + "/samples/bracket.ply";
+  const std::string scan = scan_path();
   const fs::path spline = dir / "bracket.tbs";
   Result r = run("fit '" + scan + "' -o '" + spline.string() + "' --units mm -q");
   ASSERT_EQ(r.code, 0) << r.err;
@@ -465,7 +465,7 @@ TEST(CliConvert, ErrorMapOfTheFittedScan) {
 
 TEST(CliConvert, StoredPointsFeedErrorMapsAndHeatMaps) {
   const fs::path dir = temp_dir();
-  const std::string scan = std::string(TBS_SOURCE_DIR) + "/samples/bracket.ply";
+  const std::string scan = scan_path();
   const fs::path spline = dir / "kept.tbs";
   Result r = run("fit '" + scan + "' -o '" + spline.string() + "' --units mm --keep-points -q");
   ASSERT_EQ(r.code, 0) << r.err;
@@ -539,7 +539,7 @@ TEST(CliConvert, InterruptedWriteLeavesTheOldFile) {
 
 TEST(CliFit, ExportsInTheSameCall) {
   const fs::path dir = temp_dir();
-  const std::string scan = std::string(TBS_SOURCE_DIR) + "/samples/bracket.ply";
+  const std::string scan = scan_path();
   Result r = run("fit '" + scan + "' -o '" + (dir / "e.tbs").string() + "' --units mm -q --export '" +
                  (dir / "e.glb").string() + "' --export '" + (dir / "e.exr").string() + "'");
   ASSERT_EQ(r.code, 0) << r.err;

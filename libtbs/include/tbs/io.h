@@ -59,6 +59,8 @@ class AtomicOutput {
 
   /// Path of the temporary file to write to.
   const std::string& temp_path() const { return temp_; }
+  /// Writes `data` as the temporary file's whole content. \throw IoError naming the final path.
+  void write(std::string_view data);
   /// Renames the temporary file to the final path. \throw IoError.
   void commit();
 
