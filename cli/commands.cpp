@@ -25,6 +25,10 @@
 namespace tbs::cli {
 namespace {
 
+// A mesh fit of more points is not subdivided again when it does not reach the tolerance:
+// the next fit would need four times the points, memory and time.
+constexpr size_t kMaxDensifyPoints = 100'000;
+
 using json = nlohmann::ordered_json;
 
 json box_json(const Point2& lo, const Point2& hi) {
@@ -300,10 +304,11 @@ int fit_and_write(const FitCommandOptions& o, ParameterizedScan* pscan, const Sc
     say(line + p.message);
   };
   FitResult r = fit(pscan ? pscan->scan : *plain, fo);
-  if (pscan && !r.report.converged && r.report.stop_reason.find("budget") != std::string::npos && densify &&
-      densify(*pscan)) {
-    say("tbs fit: the vertices alone did not reach the tolerance within the control-point budget; fitting the "
-        "subdivided mesh (" + std::to_string(pscan->scan.positions.size()) + " points)");
+  while (pscan && !r.report.converged && r.report.stop_reason.find("budget") != std::string::npos && densify) {
+    const size_t before = pscan->scan.positions.size();
+    if (!densify(*pscan)) break;
+    say("tbs fit: " + std::to_string(before) + " points did not reach the tolerance within the control-point "
+        "budget; fitting the subdivided mesh (" + std::to_string(pscan->scan.positions.size()) + " points)");
     r = fit(pscan->scan, fo);
   }
   if (say.tty && !say.quiet) std::fprintf(stderr, "\n");
@@ -405,10 +410,12 @@ int run_fit(const FitCommandOptions& o) {
   po.sharp_angle = o.fit.feature_angle;
   // Vertices first; a coarse mesh is subdivided only if they are not enough (see fit_and_write).
   auto densify = [&](ParameterizedScan& p) {
-    if (p.report.input != "mesh" || o.min_points == 0 || p.report.used.vertices >= o.min_points) return false;
+    const size_t points = p.scan.positions.size();
+    if (p.report.input != "mesh" || o.min_points == 0 || points > kMaxDensifyPoints) return false;
     ParameterizeOptions dense = po;
     dense.component = p.report.component;
-    dense.min_points = o.min_points;
+    // One more subdivision than now (each about quadruples the points), more up to --min-points.
+    dense.min_points = std::max(o.min_points, 2 * points);
     p = parameterize_scan(scan, dense);
     return p.report.subdivisions > 0;
   };

@@ -57,6 +57,7 @@ struct ConvertOptions {
   int patch_degree = 0;      // 0: spline degree + 2
   double cad_tolerance = 1e-6;
   double angle_tolerance = 1.0;
+  long max_patches = 50'000;
   std::string schema = "ap214";
   std::string triangle_patch = "quads";
   std::string units;         // empty: the .tbs units (mm when unitless)

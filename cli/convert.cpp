@@ -270,6 +270,7 @@ int run_convert(const ConvertOptions& o) {
     co.degree = o.patch_degree;
     co.tolerance = o.cad_tolerance;
     co.angle_tolerance = o.angle_tolerance;
+    co.max_patches = o.max_patches;
     co.threads = o.threads;
     const CadPatches c = make_cad_patches(s, co);
     patches = patch_set(c);
@@ -278,9 +279,24 @@ int run_convert(const ConvertOptions& o) {
     normal_deviation = c.max_normal_deviation;
     tolerance = c.tolerance;
     within = c.within_tolerance;
-    if (!within)
-      say("warning: the patches are not within the CAD tolerance everywhere (deepest split "
-          "reached); see 'max deviation' below, or use --exact");
+    char line[400];
+    if (c.max_position_deviation > c.tolerance) {
+      std::snprintf(line, sizeof line,
+                    "warning: the patches are up to %.3g from the spline, over the CAD tolerance %.3g (%s); "
+                    "raise --max-patches or --cad-tolerance, or use --exact",
+                    c.max_position_deviation, c.tolerance,
+                    c.budget_reached ? "patch budget --max-patches reached" : "deepest split reached");
+      say(line);
+    }
+    if (c.max_normal_deviation > c.angle_tolerance / 2) {
+      std::snprintf(line, sizeof line,
+                    "warning: patch normals differ from the spline's by up to %.3g degrees (limit %.3g) "
+                    "where its normal turns faster than patches can follow (a fold, or a crease that "
+                    "ends inside the surface)%s",
+                    c.max_normal_deviation, c.angle_tolerance / 2,
+                    c.budget_reached ? ", or where the patch budget --max-patches stopped splitting" : "");
+      say(line);
+    }
   }
   say("writing " + std::to_string(patches.size()) + " patches to " + o.output);
   const CadExportReport r = format == "step" ? write_step(o.output, patches, eo) : write_iges(o.output, patches, eo);

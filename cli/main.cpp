@@ -78,6 +78,10 @@ int main(int argc, char** argv) {
   fit_cmd->add_option("--fairness", fit.fit.fairness,
                       "Weight of the normal fairness term (dimensionless; 0 turns it off)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
+  fit_cmd->add_option("--bending", fit.fit.bending,
+                      "Weight of the bending (thin-plate) term that holds the surface between "
+                      "points (dimensionless; 0 turns it off)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
   auto* fa = fit_cmd->add_option("--feature-angle", fit.fit.feature_angle,
                                  "Dihedral angle in degrees above which an edge is a sharp feature "
                                  "(kept C^0)")
@@ -112,10 +116,10 @@ int main(int argc, char** argv) {
                       "lscm, or mean-value")
       ->check(CLI::IsMember({"auto", "lscm", "mean-value"}))->capture_default_str();
   fit_cmd->add_option("--min-points", fit.min_points,
-                      "Scans without (u, v): when a mesh's vertices alone do not reach the tolerance within "
-                      "the control-point budget and it has fewer vertices than this, it is subdivided 1-to-4 "
-                      "(new points on a smooth surface through the vertices) until it has this many, and "
-                      "fitted again; 0 = never")
+                      "Scans without (u, v): when a mesh's vertices do not reach the tolerance within the "
+                      "control-point budget, it is subdivided 1-to-4 (new points on a smooth surface through "
+                      "the vertices) until it has this many points (at least once) and fitted again; once "
+                      "more while the fit still stops at the budget with at most 100,000 points; 0 = never")
       ->capture_default_str();
   fit_cmd->add_flag("--keep-points", fit.keep_points,
                     "Store the points and their parameters in the .tbs, so that 'tbs convert' can make "
@@ -173,6 +177,10 @@ int main(int argc, char** argv) {
                           "Largest angle in degrees between the normals of patches meeting where the "
                           "surface is smooth")
       ->check(CLI::Range(0.001, 89.0))->capture_default_str();
+  convert_cmd->add_option("--max-patches", convert.max_patches,
+                          "Most compact patches: splitting stops there, with a warning if the "
+                          "tolerances are not met (each patch is 3 B-spline faces with quads)")
+      ->check(CLI::Range(1L, 10'000'000L))->capture_default_str();
   convert_cmd->add_option("--schema", convert.schema, "STEP schema: ap214 or ap242")
       ->check(CLI::IsMember({"ap214", "ap242"}, CLI::ignore_case))->capture_default_str();
   convert_cmd->add_option("--triangle-patch", convert.triangle_patch,

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 
 namespace tbs {
@@ -32,6 +33,13 @@ constexpr double kPatchMargin = 0.5;
 constexpr double kJunctionMargin = 0.25;
 // Normals vary slowly between the dense check samples: a smaller margin does.
 constexpr double kNormalMargin = 0.75;
+// Two splits that leave the normal deviation above this fraction of the grandparent's have
+// not helped: the spline's normal turns faster there than any patch can follow (a crease that
+// ends inside the surface, a fold). Such a patch is not split again for its normals alone.
+// (One split is not enough to tell: a child can inherit its parent's boundary curves.) Above
+// kNormalFreeLevels splits, the stall is not checked: coarse patches converge unevenly.
+constexpr double kNormalStall = 0.75;
+constexpr int kNormalFreeLevels = 4;
 
 // A patch corner, named the same way from every triangle that has it: a domain vertex
 // (kind 0), a point on a domain edge at position b from its lower vertex (kind 1), or a point
@@ -63,6 +71,8 @@ struct Leaf {
   bool fitted = false;
   std::vector<Point3> net;
   double position_dev = 0, normal_dev = 0;
+  double parent_normal_dev = std::numeric_limits<double>::infinity();
+  double grandparent_normal_dev = std::numeric_limits<double>::infinity();
 };
 
 struct Side {
@@ -204,10 +214,14 @@ class Builder {
     return {d_.vertex(tri[0]), d_.vertex(tri[1]), d_.vertex(tri[2])};
   }
 
-  void make_leaf(int t, int level, const std::array<IBary, 3>& c) {
+  void make_leaf(int t, int level, const std::array<IBary, 3>& c,
+                 double parent_normal_dev = std::numeric_limits<double>::infinity(),
+                 double grandparent_normal_dev = std::numeric_limits<double>::infinity()) {
     Leaf f;
     f.triangle = t;
     f.level = level;
+    f.parent_normal_dev = parent_normal_dev;
+    f.grandparent_normal_dev = grandparent_normal_dev;
     f.corner = c;
     for (int j = 0; j < 3; ++j) {
       f.key[j] = key(t, c[j]);
@@ -534,7 +548,9 @@ CadPatches Builder::run() {
     std::vector<char> master_split(masters.size(), 0);
     for (int i = 0; i < nl; ++i) {
       const Leaf& f = leaves_[i];
-      if (f.position_dev <= kPatchMargin * tol && f.normal_dev <= kNormalMargin * angle_tol / 2) continue;
+      const bool normal_bad = f.normal_dev > kNormalMargin * angle_tol / 2 &&
+                              (f.level < kNormalFreeLevels || f.normal_dev < kNormalStall * f.grandparent_normal_dev);
+      if (f.position_dev <= kPatchMargin * tol && !normal_bad) continue;
       split[i] = 1;
       for (int k = 0; k < 3; ++k) {
         const Side& sd = sides[3 * i + k];
@@ -548,10 +564,16 @@ CadPatches Builder::run() {
       const Master& mc = masters[sd.master];
       if (master_split[sd.master] && sd.lo() == mc.lo && sd.hi() == mc.hi) split[sd.leaf] = 1;
     }
-    bool any = false;
+    int splits = 0;
     for (int i = 0; i < nl; ++i)
-      if (split[i] && leaves_[i].level < o_.max_level) any = true;
-    if (!any) {
+      if (split[i] && leaves_[i].level < o_.max_level) ++splits;
+    // The patch budget: rather a file that misses the tolerance somewhere (and says so) than
+    // one too large to write or read.
+    if (nl + 3 * static_cast<long>(splits) > o_.max_patches) {
+      splits = 0;
+      out.budget_reached = true;
+    }
+    if (splits == 0) {
       out.max_position_deviation = out.max_normal_deviation = 0;
       for (const Master& mc : masters) out.max_position_deviation = std::max(out.max_position_deviation, mc.dev);
       for (const Leaf& f : leaves_) {
@@ -575,10 +597,11 @@ CadPatches Builder::run() {
         return IBary{(p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2};
       };
       const IBary ab = mid(a, b), bc = mid(b, c), ca = mid(c, a);
-      make_leaf(f.triangle, f.level + 1, {a, ab, ca});
-      make_leaf(f.triangle, f.level + 1, {ab, b, bc});
-      make_leaf(f.triangle, f.level + 1, {ca, bc, c});
-      make_leaf(f.triangle, f.level + 1, {bc, ca, ab});
+      const double nd = f.normal_dev, pd = f.parent_normal_dev;
+      make_leaf(f.triangle, f.level + 1, {a, ab, ca}, nd, pd);
+      make_leaf(f.triangle, f.level + 1, {ab, b, bc}, nd, pd);
+      make_leaf(f.triangle, f.level + 1, {ca, bc, c}, nd, pd);
+      make_leaf(f.triangle, f.level + 1, {bc, ca, ab}, nd, pd);
     }
   }
 
@@ -626,6 +649,10 @@ CadPatches make_cad_patches(const Spline& spline, const CadPatchOptions& options
     throw InvalidInput("angle tolerance must be between 0 and 90 degrees");
   if (o.max_level < 0 || o.max_level > 16)
     throw InvalidInput("max_level must be 0 to 16");
+  if (o.max_patches < spline.domain().triangle_count())
+    throw InvalidInput("the CAD patch budget (" + std::to_string(o.max_patches) +
+                       ") is below the number of domain triangles (" +
+                       std::to_string(spline.domain().triangle_count()) + "): raise it");
   Builder b(spline, o);
   return b.run();
 }

@@ -41,6 +41,7 @@ void check_options(const FitOptions& o) {
   if (!(o.tolerance_abs >= 0) || !std::isfinite(o.tolerance_abs)) bad("tolerance_abs must be >= 0");
   if (o.triangles < 0 || o.triangles > 10'000'000) bad("triangles must be between 0 (automatic) and 10^7");
   if (!(o.fairness >= 0) || !std::isfinite(o.fairness)) bad("fairness must be >= 0");
+  if (!(o.bending >= 0) || !std::isfinite(o.bending)) bad("bending must be >= 0");
   if (!(o.feature_angle > 0 && o.feature_angle < 180)) bad("feature angle must be between 0 and 180 degrees");
   if (o.max_control_points < 0) bad("max_control_points must be >= 0");
   if (o.max_iterations < 0) bad("max_iterations must be >= 0");
@@ -103,6 +104,7 @@ std::string FitReport::to_json(bool with_times) const {
   j["tolerance_abs"] = tolerance_abs;
   j["scale"] = scale;
   j["fairness"] = fairness;
+  j["bending"] = bending;
   j["converged"] = converged;
   j["stop_reason"] = stop_reason;
   j["iterations"] = iterations;
@@ -160,6 +162,7 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
   rep.points = N;
   rep.degree = n;
   rep.fairness = opt.fairness;
+  rep.bending = opt.bending;
 
   Box3 box;
   for (const auto& p : scan.positions) box.extend(p);
@@ -210,6 +213,7 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
   // and does not grow stronger as refinement shrinks the triangles.
   const double lambda = opt.fairness;
   std::vector<double> fair(N, 0.0);
+  std::vector<double> bend;
   const size_t max_cp = opt.max_control_points > 0 ? static_cast<size_t>(opt.max_control_points)
                                                    : std::max<size_t>(N, 16);
 
@@ -280,7 +284,33 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
         for (int k = 0; k < 3; ++k) h2 = std::max(h2, (d.vertex(t[k]) - d.vertex(t[(k + 1) % 3])).squaredNorm());
         fair[i] = h2;
       }
-      return detail::FitPoints{scan.positions, normals, uv, located, order, start, fair};
+      // Bending: weight density * h^4 per triangle, the density of the points in use over the
+      // whole domain, so that triangles with few points are held by it. Where a triangle has
+      // more points than control points of its own (beta_count), the points decide its shape
+      // and bending would only bias it: there the weight drops by (beta_count / points)^2.
+      bend.clear();
+      if (opt.bending > 0) {
+        double area = 0;
+        bend.resize(d.triangle_count());
+        for (int t = 0; t < d.triangle_count(); ++t) {
+          const auto& tri = d.triangle(t);
+          const Vector2 e1 = d.vertex(tri[1]) - d.vertex(tri[0]), e2 = d.vertex(tri[2]) - d.vertex(tri[0]);
+          area += 0.5 * std::abs(e1.x() * e2.y() - e1.y() * e2.x());
+          double h2 = 0;
+          for (int k = 0; k < 3; ++k) h2 = std::max(h2, (d.vertex(tri[k]) - d.vertex(tri[(k + 1) % 3])).squaredNorm());
+          bend[t] = h2 * h2;
+        }
+        size_t used = 0;
+        for (size_t i = 0; i < N; ++i) used += located[i] >= 0;
+        const double density = area > 0 ? static_cast<double>(used) / area : 0.0;
+        const double own = beta_count(n);
+        for (int t = 0; t < d.triangle_count(); ++t) {
+          const double here = start[t + 1] - start[t];
+          const double fewer = here > own ? (own / here) * (own / here) : 1.0;
+          bend[t] *= opt.bending * density * fewer;
+        }
+      }
+      return detail::FitPoints{scan.positions, normals, uv, located, order, start, fair, bend};
     };
     auto solve = [&] {
       const auto ts = Clock::now();

@@ -36,6 +36,46 @@ struct Local {
   std::vector<double> rhs;              // m x 3
 };
 
+// Second derivatives of F at interior quadrature points of a domain triangle, as sparse rows
+// over the control points, by forward differences of the exact first derivatives (the
+// evaluator gives F, F_u, F_v). The step is far below the triangle size and the points are
+// away from its edges, so the differences stay inside the triangle and off feature edges.
+struct BendSample {
+  BasisRow row[3];  // at x, x + d e_u, x + d e_v
+  double delta = 0;
+  double weight = 0;  // quadrature weight times triangle area
+};
+
+// Symmetric Gauss rules on a triangle: barycentric points (a, a, 1 - 2a) and their
+// permutations, with weights summing to 1. Three points are exact for quadratics: the
+// bending integrand of a cubic piece. Degree 4 and up use Dunavant's six points (degree 4).
+struct QuadOrbit {
+  double a, w;
+};
+constexpr QuadOrbit kQuad3[] = {{1.0 / 6.0, 1.0 / 3.0}};
+constexpr QuadOrbit kQuad6[] = {{0.445948490915965, 0.223381589678011},
+                                {0.091576213509771, 0.109951743655322}};
+
+template <class F>
+void for_bend_samples(const Evaluator& eval, const Domain& d, int degree, int t, BendSample& s, F&& f) {
+  const auto& tri = d.triangle(t);
+  const Point2 &a = d.vertex(tri[0]), &b = d.vertex(tri[1]), &c = d.vertex(tri[2]);
+  const double area = 0.5 * std::abs((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
+  const double h = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+  s.delta = 1e-4 * h;
+  const Point2 du(s.delta, 0), dv(0, s.delta);
+  const std::span<const QuadOrbit> rule = degree <= 3 ? std::span<const QuadOrbit>(kQuad3) : std::span<const QuadOrbit>(kQuad6);
+  for (const QuadOrbit& q : rule)
+    for (int k = 0; k < 3; ++k) {
+      const double l1 = 1 - 2 * q.a;
+      const Point2 x = (k == 0 ? l1 : q.a) * a + (k == 1 ? l1 : q.a) * b + (k == 2 ? l1 : q.a) * c;
+      if (!eval.basis_row(x, s.row[0]) || !eval.basis_row(x + du, s.row[1]) || !eval.basis_row(x + dv, s.row[2]))
+        continue;
+      s.weight = q.w * area;
+      f(s);
+    }
+}
+
 template <class F>
 void run(int threads, F&& f) {
   if (threads > 0) {
@@ -59,12 +99,16 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
   struct Scratch {
     BasisRow row;
     std::vector<int> where;
+    BendSample bend;
+    std::vector<double> huu, huv, hvv;
   };
-  tbb::enumerable_thread_specific<Scratch> scratch([N] { return Scratch{{}, std::vector<int>(N, -1)}; });
+  tbb::enumerable_thread_specific<Scratch> scratch([N] { return Scratch{{}, std::vector<int>(N, -1), {}, {}, {}, {}}; });
+  auto bends = [&](int t) { return !pts.bend.empty() && pts.bend[t] > 0; };
+  auto idle = [&](int t) { return pts.start[t + 1] == pts.start[t] && !bends(t); };
   std::vector<std::vector<int>> support(T);
   run(threads, [&] {
     tbb::parallel_for(0, T, [&](int t) {
-      if (pts.start[t + 1] == pts.start[t]) return;
+      if (idle(t)) return;
       Scratch& sc = scratch.local();
       std::vector<int>& S = support[t];
       for (int q = pts.start[t]; q < pts.start[t + 1]; ++q) {
@@ -72,6 +116,12 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
         for (int j : sc.row.index)
           if (sc.where[j] < 0) sc.where[j] = 0, S.push_back(j);
       }
+      if (bends(t))
+        for_bend_samples(eval, d, spline.degree(), t, sc.bend, [&](const BendSample& b) {
+          for (const BasisRow& r : b.row)
+            for (int j : r.index)
+              if (sc.where[j] < 0) sc.where[j] = 0, S.push_back(j);
+        });
       for (int j : S) sc.where[j] = -1;
       std::sort(S.begin(), S.end());
     });
@@ -130,7 +180,7 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
       tbb::parallel_for(t0, t1, [&](int t) {
         Local& L = locals[t - t0];
         L.S.clear();
-        if (pts.start[t + 1] == pts.start[t]) return;
+        if (idle(t)) return;
         Scratch& sc = scratch.local();
         L.S = support[t];
         const size_t m = L.S.size();
@@ -169,6 +219,41 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
               }
             }
           }
+        }
+        if (bends(t)) {
+          // bend[t] * sum_q w_q (huu huu^T + 2 huv huv^T + hvv hvv^T), rows dense over S.
+          for (auto* h : {&sc.huu, &sc.huv, &sc.hvv}) h->assign(m, 0.0);
+          for_bend_samples(eval, d, spline.degree(), t, sc.bend, [&](const BendSample& b) {
+            std::fill(sc.huu.begin(), sc.huu.end(), 0.0);
+            std::fill(sc.huv.begin(), sc.huv.end(), 0.0);
+            std::fill(sc.hvv.begin(), sc.hvv.end(), 0.0);
+            // F_uu = (F_u(x + d e_u) - F_u(x)) / d, F_vv likewise, F_uv from both sides.
+            const double f = 1.0 / b.delta;
+            for (int side = 0; side < 3; ++side) {
+              const BasisRow& r = b.row[side];
+              for (size_t a = 0; a < r.index.size(); ++a) {
+                const int l = sc.where[r.index[a]];
+                if (l < 0) throw SolverError("internal: basis function outside its support set");
+                if (side == 0) {
+                  sc.huu[l] -= f * r.du[a];
+                  sc.hvv[l] -= f * r.dv[a];
+                  sc.huv[l] -= 0.5 * f * (r.du[a] + r.dv[a]);
+                } else if (side == 1) {
+                  sc.huu[l] += f * r.du[a];
+                  sc.huv[l] += 0.5 * f * r.dv[a];
+                } else {
+                  sc.hvv[l] += f * r.dv[a];
+                  sc.huv[l] += 0.5 * f * r.du[a];
+                }
+              }
+            }
+            const double w = pts.bend[t] * b.weight;
+            for (size_t a = 0; a < m; ++a) {
+              if (sc.huu[a] == 0 && sc.huv[a] == 0 && sc.hvv[a] == 0) continue;
+              for (size_t c = 0; c < m; ++c)
+                L.G[a * m + c] += w * (sc.huu[a] * sc.huu[c] + 2 * sc.huv[a] * sc.huv[c] + sc.hvv[a] * sc.hvv[c]);
+            }
+          });
         }
         for (size_t a = 0; a < m; ++a) sc.where[L.S[a]] = -1;
       });

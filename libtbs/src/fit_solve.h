@@ -22,6 +22,9 @@ struct FitPoints {
   std::span<const int> order;       // point indices grouped by triangle (see group_by_triangle)
   std::span<const int> start;       // order[start[t] .. start[t+1]) are the points of t
   std::span<const double> fair;     // per-point factor of the fairness term (empty: 1)
+  /// Per-triangle weight of the thin-plate term (empty: no such term): the bending energy
+  /// integral of F over triangle t is multiplied by bend[t]; see solve_control_points.
+  std::span<const double> bend = {};
   double fair_weight(int i) const { return fair.empty() ? 1.0 : fair[i]; }
 };
 
@@ -29,8 +32,9 @@ struct FitPoints {
 void group_by_triangle(std::span<const int> triangle, int triangle_count, std::vector<int>& order,
                        std::vector<int>& start);
 
-/// Minimises sum |p - F(u)|^2 + lambda sum w_i ((n.F_u)^2 + (n.F_v)^2) + regulariser, with
-/// w_i = pts.fair_weight(i), over the control
+/// Minimises sum |p - F(u)|^2 + lambda sum w_i ((n.F_u)^2 + (n.F_v)^2)
+///           + sum_t bend[t] integral_t (|F_uu|^2 + 2 |F_uv|^2 + |F_vv|^2) + regulariser,
+/// with w_i = pts.fair_weight(i), over the control
 /// points of `spline` (knots fixed) and returns them. Deterministic for any thread count.
 /// \throw SolverError if the factorisation fails.
 std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& eval,

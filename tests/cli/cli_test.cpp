@@ -278,11 +278,16 @@ TEST(CliFit, MeshWithoutParametersIsFlattenedAndFitted) {
   EXPECT_EQ(meta["parameterization"]["input"], "mesh");
   EXPECT_NE(r.out.find("points             910"), std::string::npos) << r.out;
   // When the vertices are not enough within the control-point budget, the mesh is subdivided
-  // and fitted again; --min-points 0 never subdivides.
-  r = run("fit '" + in.string() + "' -o '" + out.string() + "' --tolerance 1e-6 --max-control-points 300 -q");
+  // to --min-points (2 subdivisions, 13,567 points) and fitted again, and subdivided again
+  // while that is not enough either and the fit has at most 100,000 points (4 subdivisions
+  // here); --min-points 0 never subdivides.
+  r = run("fit '" + in.string() + "' -o '" + out.string() + "' --tolerance 1e-6 --max-control-points 300");
   ASSERT_EQ(r.code, 0) << r.err;
-  EXPECT_NE(r.out.find("subdivided         2 x 1-to-4"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("points             13567"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("910 points did not reach the tolerance within the control-point budget; fitting the "
+                       "subdivided mesh (13567 points)"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("13567 points did not reach"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("subdivided         4 x 1-to-4"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("points             213055"), std::string::npos) << r.out;
   r = run("fit '" + in.string() + "' -o '" + out.string() + "' --tolerance 1e-6 --max-control-points 300 --min-points 0 -q");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(r.out.find("subdivided"), std::string::npos) << r.out;

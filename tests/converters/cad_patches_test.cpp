@@ -234,6 +234,37 @@ TEST(CadPatches, RejectsBadOptions) {
   EXPECT_THROW(make_cad_patches(s, {.tolerance = 0}), InvalidInput);
   EXPECT_THROW(make_cad_patches(s, {.angle_tolerance = -1}), InvalidInput);
   EXPECT_THROW(make_cad_patches(s, {.max_level = 40}), InvalidInput);
+  EXPECT_THROW(make_cad_patches(s, {.max_patches = s.domain().triangle_count() - 1}), InvalidInput);
+}
+
+TEST(CadPatches, StopsAtThePatchBudgetAndSaysSo) {
+  const Spline s = make_spline(3, false, 39);
+  const long budget = 3L * s.domain().triangle_count();
+  const CadPatches c = make_cad_patches(s, {.tolerance = 1e-12, .max_patches = budget});
+  EXPECT_TRUE(c.budget_reached);
+  EXPECT_FALSE(c.within_tolerance);
+  EXPECT_LE(static_cast<long>(c.patches.size()), budget);
+  EXPECT_GT(c.max_position_deviation, c.tolerance);
+  // Without the budget the same tolerance takes more patches.
+  const CadPatches d = make_cad_patches(s, {.tolerance = 1e-12, .max_level = 3});
+  EXPECT_FALSE(d.budget_reached);
+  EXPECT_GT(d.patches.size(), c.patches.size());
+}
+
+// A degree-1 spline is piecewise linear over the cells of its knot lines, which cross the
+// domain triangles: its normal jumps inside them, and no patch can follow a jump. Splitting
+// for the normals stops where it stops helping, instead of going to the deepest level
+// everywhere along the kinks (4^10 patches per triangle).
+TEST(CadPatches, KinksInsideTrianglesDoNotSplitForever) {
+  const Spline s = make_spline(1, false, 40, 2);
+  const int T = s.domain().triangle_count();
+  const CadPatches c = make_cad_patches(s, {.degree = 3, .tolerance = 1e-3, .angle_tolerance = 1});
+  EXPECT_FALSE(c.budget_reached);
+  EXPECT_LT(c.patches.size(), 400u * T) << c.patches.size() << " patches for " << T << " triangles";
+  // It says that the angle tolerance is not met, and by how much.
+  EXPECT_GT(c.max_normal_deviation, 0.5);
+  EXPECT_FALSE(c.within_tolerance);
+  EXPECT_LE(c.max_position_deviation, c.tolerance);
 }
 
 TEST(CadPatches, ReportsWhenTheDepthLimitStopsIt) {

@@ -28,11 +28,19 @@ struct CadPatchOptions {
   double tolerance_abs = 0;
   /// Largest allowed angle, in degrees, between the normals of two patches that meet where
   /// the spline is smooth. Each patch keeps within half of it of the spline's normal (on its
-  /// own side of a feature edge, so creases keep their angle).
+  /// own side of a feature edge, so creases keep their angle), except on a patch split 4 times
+  /// or more whose last two splits did not bring its normal deviation below 3/4 of what it
+  /// was: there the spline's normal
+  /// turns faster than patches can follow (a crease ending inside the surface, a fold), and
+  /// the patch is kept (max_normal_deviation then says by how much it misses).
   double angle_tolerance = 1.0;
   /// Deepest 1-to-4 split (a patch then spans 4^-max_level of its domain triangle). Where the
   /// tolerance is not met at this depth, the result says so (within_tolerance = false).
   int max_level = 10;
+  /// Most patches. Splitting stops before a round would exceed it (the result then says
+  /// budget_reached and, where the tolerance is not met, within_tolerance = false). Must be at
+  /// least the number of domain triangles.
+  long max_patches = 50'000;
   int threads = 0;  ///< Worker threads, 0 for all cores. The result does not depend on it.
 };
 
@@ -80,6 +88,8 @@ struct CadPatches {
   double max_normal_deviation = 0;
   /// Both deviations are within the tolerances.
   bool within_tolerance = false;
+  /// Splitting stopped at CadPatchOptions::max_patches.
+  bool budget_reached = false;
   int rounds = 0;  ///< Split rounds performed.
 
   std::span<const Point3> net(int patch) const {

@@ -33,6 +33,14 @@ struct FitOptions {
   /// length like the distance term, for any parameter scale, and keeps it from growing stronger
   /// as refinement shrinks triangles.
   double fairness = 1e-3;
+  /// Weight of the bending (thin-plate) term, dimensionless: the integral of
+  /// |F_uu|^2 + 2 |F_uv|^2 + |F_vv|^2 over each domain triangle, times the mean point density
+  /// (points per unit parameter area) and the fourth power of the triangle's longest edge, and
+  /// by (beta_count(n) / points in it)^2 where a triangle holds more points than that. It
+  /// decides the surface between points, where the point terms do not reach: without it a
+  /// sparse scan (a mesh's vertices) can be met at its points by a surface that swings far off
+  /// between them. 0 turns it off.
+  double bending = 1e-4;
   /// Dihedral angle (degrees) above which a mesh edge is a sharp feature.
   double feature_angle = 40;
   bool features = true;
@@ -73,6 +81,7 @@ struct FitReport {
   double tolerance = 0;      ///< relative
   double tolerance_abs = 0;  ///< model units
   double fairness = 0;
+  double bending = 0;
   bool converged = false;
   std::string stop_reason;
   int iterations = 0;
