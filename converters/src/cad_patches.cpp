@@ -568,10 +568,20 @@ CadPatches Builder::run() {
     for (int i = 0; i < nl; ++i)
       if (split[i] && leaves_[i].level < o_.max_level) ++splits;
     // The patch budget: rather a file that misses the tolerance somewhere (and says so) than
-    // one too large to write or read.
+    // one too large to write or read. The worst patches (relative to the tolerances) split
+    // first, as many as the budget allows.
     if (nl + 3 * static_cast<long>(splits) > o_.max_patches) {
-      splits = 0;
       out.budget_reached = true;
+      std::vector<int> want;
+      for (int i = 0; i < nl; ++i)
+        if (split[i] && leaves_[i].level < o_.max_level) want.push_back(i);
+      auto badness = [&](int i) {
+        return std::max(leaves_[i].position_dev / tol, leaves_[i].normal_dev / (angle_tol / 2));
+      };
+      std::stable_sort(want.begin(), want.end(), [&](int a, int b) { return badness(a) > badness(b); });
+      const size_t room = static_cast<size_t>(std::max<long>(0, (o_.max_patches - nl) / 3));
+      for (size_t k = room; k < want.size(); ++k) split[want[k]] = 0;
+      splits = static_cast<int>(std::min(room, want.size()));
     }
     if (splits == 0) {
       out.max_position_deviation = out.max_normal_deviation = 0;

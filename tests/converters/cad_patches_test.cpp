@@ -244,6 +244,8 @@ TEST(CadPatches, StopsAtThePatchBudgetAndSaysSo) {
   EXPECT_TRUE(c.budget_reached);
   EXPECT_FALSE(c.within_tolerance);
   EXPECT_LE(static_cast<long>(c.patches.size()), budget);
+  // The budget is used: the worst patches split until no further split fits.
+  EXPECT_GT(static_cast<long>(c.patches.size()), budget - 3);
   EXPECT_GT(c.max_position_deviation, c.tolerance);
   // Without the budget the same tolerance takes more patches.
   const CadPatches d = make_cad_patches(s, {.tolerance = 1e-12, .max_level = 3});

@@ -37,9 +37,10 @@ struct CadPatchOptions {
   /// Deepest 1-to-4 split (a patch then spans 4^-max_level of its domain triangle). Where the
   /// tolerance is not met at this depth, the result says so (within_tolerance = false).
   int max_level = 10;
-  /// Most patches. Splitting stops before a round would exceed it (the result then says
-  /// budget_reached and, where the tolerance is not met, within_tolerance = false). Must be at
-  /// least the number of domain triangles.
+  /// Most patches. A round that would exceed it splits only the patches furthest out of
+  /// tolerance (relative to the tolerances), as many as fit, and splitting stops there (the
+  /// result says budget_reached and, where the tolerances are not met, within_tolerance =
+  /// false). Must be at least the number of domain triangles.
   long max_patches = 50'000;
   int threads = 0;  ///< Worker threads, 0 for all cores. The result does not depend on it.
 };
