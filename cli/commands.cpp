@@ -395,7 +395,7 @@ int run_fit(const FitCommandOptions& o) {
   const Say say{o.quiet, isatty(fileno(stderr)) != 0};
 
   say("tbs fit: reading " + o.input);
-  const Scan scan = read_scan(o.input);
+  const Scan scan = read_scan(o.input, {.max_points = o.max_points, .limit_name = "--max-points"});
   if (scan.has_uv()) {
     if (o.component > 0 || o.all_components)
       say("tbs fit: the scan has parameters (u, v); --component and --all-components apply only to scans without them");

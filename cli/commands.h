@@ -31,6 +31,10 @@ struct EvalOptions {
 };
 int run_eval(const EvalOptions& o);
 
+// Scans with more points are refused before they are read (--max-points): a fit takes about
+// 1 KB per point (docs/benchmarks.md), so this is about 10 GB.
+inline constexpr size_t kDefaultMaxPoints = 10'000'000;
+
 struct FitCommandOptions {
   std::string input;
   std::string output;
@@ -43,6 +47,7 @@ struct FitCommandOptions {
   bool all_components = false;   // fit every component, to OUT-K.tbs
   std::string flatten = "auto";  // auto, lscm or mean-value
   size_t min_points = 5000;      // subdivide coarser meshes when their vertices are not enough
+  size_t max_points = kDefaultMaxPoints;  // larger scans are refused before they are read
   bool quiet = false;
   std::vector<std::string> exports;  // files to convert the result to, as `tbs convert` does
   FitOptions fit;  // the library's defaults are the command's defaults
@@ -64,6 +69,7 @@ struct ConvertOptions {
   std::string product_name;  // empty: the output's file name without extension
   std::string points;        // error maps and heat maps: the scan with parameters (empty: the .tbs's own)
   std::string color_by = "none";
+  size_t max_points = kDefaultMaxPoints;  // --points scans with more points are refused
   // Points given in memory (tbs fit --export with computed parameters), used before `points`.
   std::vector<Point3> point_positions;
   std::vector<Point2> point_uv;  // meshes (glb, gltf): "error" adds a COLOR_0 heat map

@@ -104,7 +104,7 @@ Points points_for(const ConvertOptions& o, const SplineFile& file, const std::st
     return p;
   }
   say("reading " + o.points);
-  Scan scan = read_scan(o.points);
+  Scan scan = read_scan(o.points, {.max_points = o.max_points, .limit_name = "--max-points"});
   if (scan.uv.empty())
     throw InvalidInput(o.points + ": these points have no parameters (u, v); " + what +
                        " needs the scan the spline was fitted to");

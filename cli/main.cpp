@@ -115,6 +115,10 @@ int main(int argc, char** argv) {
                       "Scans without (u, v): auto (LSCM, or mean-value coordinates if LSCM folds), "
                       "lscm, or mean-value")
       ->check(CLI::IsMember({"auto", "lscm", "mean-value"}))->capture_default_str();
+  fit_cmd->add_option("--max-points", fit.max_points,
+                      "Refuse scans with more points than this, before reading them (a fit takes about "
+                      "1 KB of memory per point)")
+      ->check(CLI::PositiveNumber)->capture_default_str();
   fit_cmd->add_option("--min-points", fit.min_points,
                       "Scans without (u, v): when a mesh's vertices do not reach the tolerance within the "
                       "control-point budget, it is subdivided 1-to-4 (new points on a smooth surface through "
@@ -146,6 +150,9 @@ int main(int argc, char** argv) {
   convert_cmd->add_option("--points", convert.points,
                           "Error maps (exr) and --color-by error: the scan the spline was fitted to (with "
                           "parameters u v); default: the points stored by 'tbs fit --keep-points'");
+  convert_cmd->add_option("--max-points", convert.max_points,
+                          "Refuse a --points scan with more points than this, before reading it")
+      ->check(CLI::PositiveNumber)->capture_default_str();
   convert_cmd->add_option("--color-by", convert.color_by,
                           "glTF meshes: none, or error (a COLOR_0 heat map of the points' error, blue 0 to "
                           "red at the fit tolerance or the largest error; needs the points)")

@@ -417,15 +417,21 @@ AtomicOutput::AtomicOutput(std::string path) : path_(std::move(path)) {
                                                       std::to_string(::getpid()) + "-" +
                                                       std::to_string(counter++)))
                                       .string();
+    // Registered before it exists: a signal between creating and registering would leave it.
+    // (A signal while open() fails with EEXIST would remove a stale file of this process's
+    // name, which is harmless.)
+    const int slot = register_temp(candidate);
     const int fd = ::open(candidate.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
     if (fd >= 0) {
       ::close(fd);
       temp_ = candidate;
-      slot_ = register_temp(temp_);
+      slot_ = slot;
       return;
     }
-    if (errno != EEXIST)
-      throw IoError("cannot write '" + path_ + "': " + std::strerror(errno));
+    const int err = errno;
+    unregister_temp(slot);
+    if (err != EEXIST)
+      throw IoError("cannot write '" + path_ + "': " + std::strerror(err));
   }
   throw IoError("cannot write '" + path_ + "': no free temporary file name");
 }

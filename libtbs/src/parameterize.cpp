@@ -679,6 +679,21 @@ ParameterizedScan parameterize_scan(const Scan& scan, const ParameterizeOptions&
 
   std::vector<Tri> triangles = scan.triangles;
   if (cloud) {
+    // A surface needs points that span a plane at least; CGAL's triangulation would only
+    // complain on stderr.
+    {
+      Point3 mean = Point3::Zero();
+      for (const Point3& p : scan.positions) mean += p;
+      mean /= static_cast<double>(scan.positions.size());
+      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+      for (const Point3& p : scan.positions) cov += (p - mean) * (p - mean).transpose();
+      const Eigen::Vector3d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvalues();
+      if (!(ev[2] > 0))
+        throw InvalidInput(name + ": all " + std::to_string(scan.positions.size()) +
+                           " points are identical; there is no surface to fit");
+      if (ev[1] <= 1e-20 * ev[2])
+        throw InvalidInput(name + ": all points lie on one line; there is no surface to fit");
+    }
     say("reconstructing a surface from " + plural(scan.positions.size(), "point", "points") + " (advancing front)");
     std::vector<P3> pts;
     pts.reserve(scan.positions.size());

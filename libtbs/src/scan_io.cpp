@@ -72,6 +72,7 @@ struct Ctx {
   std::string path;
   std::uintmax_t file_size = 0;
   std::size_t limit = 0;  // max_points, capped to what an int index can address
+  std::string limit_name;
 
   [[noreturn]] void fail(const std::string& where, const std::string& what) const {
     throw InvalidInput(path + (where.empty() ? "" : ":" + where) + ": " + what);
@@ -85,7 +86,7 @@ struct Ctx {
   void check_count(const std::string& where, std::uintmax_t n, const std::string& what) const {
     if (n > limit)
       fail(where, what + " " + num(n) + " points; the limit is " + num(std::uintmax_t{limit}) +
-                      " (ScanReadOptions::max_points): thin the scan or raise the limit");
+                      " (" + limit_name + "): thin the scan or raise the limit");
   }
 
   void check_value(const Where& where, const char* name, double x) const {
@@ -465,12 +466,12 @@ Scan read_ply(const Ctx& c) {
     const std::uintmax_t available = c.file_size - std::min(c.file_size, h.data_offset);
     // +1: the last ASCII value needs no separator.
     if (e.count > (available + 1) / per || need + e.count * per > available + 1)
-      c.fail(where, "the header announces " + num(e.count) + " " + e.name + " items; " +
-                        (need > 0 ? "with the elements before them " : "") + "they need at least " +
-                        (e.count > available ? std::string("more than ") + num(available)
-                                             : num(need + e.count * per)) +
-                        " bytes, but only " + num(available) +
-                        " bytes follow the header; the file is truncated");
+      c.fail(where, "the header announces " + num(e.count) + " " + e.name + " items, but only " + num(available) +
+                        " bytes follow the header" +
+                        (e.count <= available ? std::string(" and they need at least ") + num(need + e.count * per) +
+                                                    (need > 0 ? " with the elements before them" : "")
+                                              : std::string()) +
+                        "; the file is truncated");
     need += e.count * per;
   }
   if (!vertex_header)
@@ -1045,6 +1046,7 @@ Scan read_scan(const std::string& path, const ScanReadOptions& options) {
   c.file_size = fs::file_size(path, ec);
   if (ec) throw IoError(path + ": cannot read the file size: " + ec.message() + "; check the path");
   c.limit = std::min<std::size_t>(options.max_points, static_cast<std::size_t>(INT_MAX));
+  c.limit_name = options.limit_name;
 
   std::string ext = fs::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),

@@ -542,6 +542,48 @@ TEST(CliConvert, InterruptedWriteLeavesTheOldFile) {
   }
 }
 
+// Interrupted while fitting: an earlier output of the same name stays, nothing else is left.
+TEST(CliFit, InterruptedFitLeavesTheOldFile) {
+  const fs::path dir = temp_dir() / "interrupt_fit";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path out = dir / "b.tbs";
+  std::ofstream(out) << "old";
+  for (int sig : {SIGINT, SIGTERM}) {
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+      const int null = ::open("/dev/null", O_WRONLY);
+      ::dup2(null, 1);
+      ::dup2(null, 2);
+      // A tight tolerance keeps it busy for many rounds.
+      const std::string scan = std::string(TBS_SOURCE_DIR) + "/samples/bracket.ply";
+      ::execl(TBS_EXE, TBS_EXE, "fit", scan.c_str(), "-o", out.c_str(), "--tolerance", "1e-6",
+              static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    ::usleep(700'000);
+    ::kill(child, sig);
+    int status = 0;
+    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << "status " << status;
+    EXPECT_EQ(read_file(out.string()), "old");
+    std::vector<std::string> left;
+    for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
+    EXPECT_EQ(left, (std::vector<std::string>{"b.tbs"}));
+  }
+}
+
+// Scans above --max-points are refused before they are read, with the option to change.
+TEST(CliFit, MaxPointsRefusesLargerScans) {
+  const fs::path dir = temp_dir();
+  const Result r = run("fit '" + std::string(TBS_SOURCE_DIR) + "/samples/bracket.ply' -o '" +
+                       (dir / "m.tbs").string() + "' --max-points 1000 -q");
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("the limit is 1000 (--max-points)"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "m.tbs"));
+}
+
 TEST(CliFit, ExportsInTheSameCall) {
   const fs::path dir = temp_dir();
   const std::string scan = scan_path();

@@ -27,6 +27,8 @@ struct Scan {
 
 struct ScanReadOptions {
   size_t max_points = 50'000'000;  ///< larger inputs are refused before allocating
+  /// How the error message names the limit, so that it says what to change.
+  std::string limit_name = "ScanReadOptions::max_points";
 };
 
 /// Reads PLY (ASCII/binary), OBJ, OFF, STL and XYZ/TXT files, chosen by the extension
