@@ -231,9 +231,10 @@ TEST(ScanErrors, PlyContentErrorsNameTheElement) {
                "face 0: the file ends early");
   expect_error(
       write("short2.ply", head + "end_header\n0 0 0\n1 0 0\n0 1\n"),
-      "line 3: the header announces 3 vertex items; they need at least 18 bytes, but only 16");
+      "line 3: the header announces 3 vertex items, but only 16 bytes follow the header and they need at "
+      "least 18;");
   expect_error(write("nofaces2.ply", head + faces + pts),
-               "with the elements before them they need at least 20 bytes, but only 18");
+               "but only 18 bytes follow the header and they need at least 20 with the elements before them;");
   expect_error(write("zero_normal.ply",
                      head + "property float nx\nproperty float ny\nproperty float nz\nend_header\n"
                             "0 0 0 0 0 1\n1 0 0 0 0 0\n0 1 0 0 0 1\n"),
