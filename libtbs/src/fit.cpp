@@ -273,16 +273,20 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
       std::vector<char> at_feature(d.vertex_count(), 0);
       if (rep.normals_estimated)
         for (const auto& e : d.feature_edges()) at_feature[e[0]] = at_feature[e[1]] = 1;
+      // Squared longest edge and area of each triangle, for both terms' weights.
+      const int T = d.triangle_count();
+      std::vector<double> longest2(T), area(T);
+      for (int t = 0; t < T; ++t) {
+        const auto& tri = d.triangle(t);
+        for (int k = 0; k < 3; ++k)
+          longest2[t] = std::max(longest2[t], (d.vertex(tri[k]) - d.vertex(tri[(k + 1) % 3])).squaredNorm());
+        const Vector2 e1 = d.vertex(tri[1]) - d.vertex(tri[0]), e2 = d.vertex(tri[2]) - d.vertex(tri[0]);
+        area[t] = 0.5 * std::abs(e1.x() * e2.y() - e1.y() * e2.x());
+      }
       for (size_t i = 0; i < N; ++i) {
         if (located[i] < 0) continue;
         const auto& t = d.triangle(located[i]);
-        if (at_feature[t[0]] || at_feature[t[1]] || at_feature[t[2]]) {
-          fair[i] = 0;
-          continue;
-        }
-        double h2 = 0;
-        for (int k = 0; k < 3; ++k) h2 = std::max(h2, (d.vertex(t[k]) - d.vertex(t[(k + 1) % 3])).squaredNorm());
-        fair[i] = h2;
+        fair[i] = at_feature[t[0]] || at_feature[t[1]] || at_feature[t[2]] ? 0.0 : longest2[located[i]];
       }
       // Bending: weight density * h^4 per triangle, the density of the points in use over the
       // whole domain, so that triangles with few points are held by it. Where a triangle has
@@ -290,24 +294,14 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
       // and bending would only bias it: there the weight drops by (beta_count / points)^2.
       bend.clear();
       if (opt.bending > 0) {
-        double area = 0;
-        bend.resize(d.triangle_count());
-        for (int t = 0; t < d.triangle_count(); ++t) {
-          const auto& tri = d.triangle(t);
-          const Vector2 e1 = d.vertex(tri[1]) - d.vertex(tri[0]), e2 = d.vertex(tri[2]) - d.vertex(tri[0]);
-          area += 0.5 * std::abs(e1.x() * e2.y() - e1.y() * e2.x());
-          double h2 = 0;
-          for (int k = 0; k < 3; ++k) h2 = std::max(h2, (d.vertex(tri[k]) - d.vertex(tri[(k + 1) % 3])).squaredNorm());
-          bend[t] = h2 * h2;
-        }
-        size_t used = 0;
-        for (size_t i = 0; i < N; ++i) used += located[i] >= 0;
-        const double density = area > 0 ? static_cast<double>(used) / area : 0.0;
+        const double total_area = std::accumulate(area.begin(), area.end(), 0.0);
+        const double density = total_area > 0 ? static_cast<double>(start[T]) / total_area : 0.0;
         const double own = beta_count(n);
-        for (int t = 0; t < d.triangle_count(); ++t) {
+        bend.resize(T);
+        for (int t = 0; t < T; ++t) {
           const double here = start[t + 1] - start[t];
           const double fewer = here > own ? (own / here) * (own / here) : 1.0;
-          bend[t] *= opt.bending * density * fewer;
+          bend[t] = opt.bending * density * longest2[t] * longest2[t] * fewer;
         }
       }
       return detail::FitPoints{scan.positions, normals, uv, located, order, start, fair, bend};
