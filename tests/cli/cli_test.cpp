@@ -503,6 +503,30 @@ TEST(CliConvert, StoredPointsFeedErrorMapsAndHeatMaps) {
   EXPECT_FALSE(fs::exists(dir / "nopoints.glb"));
 }
 
+// Starts the tbs command with ARGS in a child process, its output to /dev/null.
+pid_t start_tbs(const std::vector<std::string>& args) {
+  std::vector<char*> argv{const_cast<char*>(TBS_EXE)};
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  const pid_t child = ::fork();
+  if (child == 0) {
+    const int null = ::open("/dev/null", O_WRONLY);
+    ::dup2(null, 1);
+    ::dup2(null, 2);
+    ::execv(TBS_EXE, argv.data());
+    ::_exit(127);
+  }
+  return child;
+}
+
+// The names of the files in DIR, sorted.
+std::vector<std::string> files_in(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
 // Interrupted while writing a STEP file: the old file stays, no temporary file is left, and
 // the process ends by the signal.
 TEST(CliConvert, InterruptedWriteLeavesTheOldFile) {
@@ -513,15 +537,8 @@ TEST(CliConvert, InterruptedWriteLeavesTheOldFile) {
   ASSERT_EQ(run("fit '" + std::string(TBS_SOURCE_DIR) + "/samples/bracket.ply' -o '" + spline.string() + "' -q").code, 0);
   std::ofstream(out) << "old";
   for (int sig : {SIGINT, SIGTERM}) {
-    const pid_t child = ::fork();
+    const pid_t child = start_tbs({"convert", spline.string(), out.string(), "--cad-tolerance", "1e-5", "-q"});
     ASSERT_GE(child, 0);
-    if (child == 0) {
-      const int null = ::open("/dev/null", O_WRONLY);
-      ::dup2(null, 1);
-      ::execl(TBS_EXE, TBS_EXE, "convert", spline.c_str(), out.c_str(), "--cad-tolerance", "1e-5", "-q",
-              static_cast<char*>(nullptr));
-      ::_exit(127);
-    }
     // Wait for the hidden temporary file of the output to appear, then interrupt.
     bool seen = false;
     for (int i = 0; i < 60000 && !seen; ++i) {
@@ -535,10 +552,7 @@ TEST(CliConvert, InterruptedWriteLeavesTheOldFile) {
     ASSERT_TRUE(seen) << "the temporary file never appeared";
     EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << "status " << status;
     EXPECT_EQ(read_file(out.string()), "old");
-    std::vector<std::string> left;
-    for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
-    std::sort(left.begin(), left.end());
-    EXPECT_EQ(left, (std::vector<std::string>{"b.step", "b.tbs"}));
+    EXPECT_EQ(files_in(dir), (std::vector<std::string>{"b.step", "b.tbs"}));
   }
 }
 
@@ -550,27 +564,17 @@ TEST(CliFit, InterruptedFitLeavesTheOldFile) {
   const fs::path out = dir / "b.tbs";
   std::ofstream(out) << "old";
   for (int sig : {SIGINT, SIGTERM}) {
-    const pid_t child = ::fork();
+    // A tight tolerance keeps it busy for many rounds.
+    const pid_t child = start_tbs({"fit", std::string(TBS_SOURCE_DIR) + "/samples/bracket.ply", "-o", out.string(),
+                                   "--tolerance", "1e-6"});
     ASSERT_GE(child, 0);
-    if (child == 0) {
-      const int null = ::open("/dev/null", O_WRONLY);
-      ::dup2(null, 1);
-      ::dup2(null, 2);
-      // A tight tolerance keeps it busy for many rounds.
-      const std::string scan = std::string(TBS_SOURCE_DIR) + "/samples/bracket.ply";
-      ::execl(TBS_EXE, TBS_EXE, "fit", scan.c_str(), "-o", out.c_str(), "--tolerance", "1e-6",
-              static_cast<char*>(nullptr));
-      ::_exit(127);
-    }
     ::usleep(700'000);
     ::kill(child, sig);
     int status = 0;
     ASSERT_EQ(::waitpid(child, &status, 0), child);
     EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << "status " << status;
     EXPECT_EQ(read_file(out.string()), "old");
-    std::vector<std::string> left;
-    for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
-    EXPECT_EQ(left, (std::vector<std::string>{"b.tbs"}));
+    EXPECT_EQ(files_in(dir), (std::vector<std::string>{"b.tbs"}));
   }
 }
 
