@@ -36,8 +36,8 @@ constexpr double kNormalMargin = 0.75;
 // Two splits that leave the normal deviation above this fraction of the grandparent's have
 // not helped: the spline's normal turns faster there than any patch can follow (a crease that
 // ends inside the surface, a fold). Such a patch is not split again for its normals alone.
-// (One split is not enough to tell: a child can inherit its parent's boundary curves.) Above
-// kNormalFreeLevels splits, the stall is not checked: coarse patches converge unevenly.
+// (One split is not enough to tell: a child can inherit its parent's boundary curves.) Patches
+// split fewer than kNormalFreeLevels times are not checked: coarse patches converge unevenly.
 constexpr double kNormalStall = 0.75;
 constexpr int kNormalFreeLevels = 4;
 
