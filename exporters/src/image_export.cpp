@@ -18,6 +18,7 @@
 #include <cmath>
 #include <exception>
 #include <array>
+#include <deque>
 #include <string>
 #include <vector>
 
@@ -27,8 +28,9 @@ void write_error_exr(const std::string& path, const ErrorMap& m, ErrorMeasure me
   const size_t np = static_cast<size_t>(m.width) * static_cast<size_t>(m.height);
   if (m.width < 1 || m.height < 1 || m.mask.size() != np)
     throw InvalidInput(path + ": the error map is empty or inconsistent");
-  // Every channel as its own float plane.
-  std::vector<std::pair<std::string, std::vector<float>>> planes;
+  // Every channel as its own float plane. A deque, because plane() hands out references that
+  // must stay valid while more planes are added.
+  std::deque<std::pair<std::string, std::vector<float>>> planes;
   auto plane = [&](const std::string& name) -> std::vector<float>& {
     planes.emplace_back(name, std::vector<float>(np));
     return planes.back().second;
