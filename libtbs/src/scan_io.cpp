@@ -613,11 +613,83 @@ std::string signed_count(std::size_t n) {
                                                  : std::to_string(n);
 }
 
-Scan read_off(const Ctx& c) {
-  // Minimum bytes of a vertex ("0 0 0\n") and of a face ("3 0 1 2\n"); binary ones are larger.
+// The header of an OFF file, read by us before CGAL sees it: CGAL 5.5's header scanner reads
+// the counts into ints and estimates a halfedge count from them in int arithmetic, which
+// overflows (undefined behaviour) for counts near 2^31. Returns the vertex and face counts.
+std::pair<std::size_t, std::size_t> read_off_header(const Ctx& c) {
+  constexpr const char* kBadHeader =
+      "not a valid OFF header (expected OFF, NOFF, 4OFF or 4NOFF, then the vertex, face and edge "
+      "counts, each below 2^31)";
+  std::ifstream is = open_binary(c);
+  // Tokens of the header; '#' starts a comment to the end of the line.
+  auto token = [&is]() {
+    std::string t;
+    char ch;
+    while (is.get(ch)) {
+      if (ch == '#') {
+        if (!t.empty()) break;
+        while (is.get(ch) && ch != '\n') {
+        }
+      } else if (std::isspace(static_cast<unsigned char>(ch))) {
+        if (!t.empty()) break;
+      } else {
+        t += ch;
+        if (t.size() > 32) break;  // no header token is this long
+      }
+    }
+    return t;
+  };
+  const std::string keyword = token();
+  // [ST][C][N][4][n]OFF
+  std::string_view rest = keyword;
+  auto take = [&rest](std::string_view prefix) {
+    if (!rest.starts_with(prefix)) return false;
+    rest.remove_prefix(prefix.size());
+    return true;
+  };
+  const bool textures = take("ST"), colours = take("C");
+  take("N");
+  take("4");
+  const bool dimension = take("n");
+  if (rest != "OFF") c.fail("line 1", kBadHeader);
+  std::string next = token();
+  bool other_dimension = false;
+  if (dimension) {
+    other_dimension = next != "3";
+    next = token();
+  }
+  if (next == "BINARY" || textures || colours || other_dimension)
+    c.fail("line 1",
+           "binary OFF and OFF with colours (C), texture coordinates (ST) or a dimension other "
+           "than 3 are not supported; convert the scan to PLY or to plain ASCII OFF");
+  long long counts[3] = {0, 0, 0};
+  for (int k = 0; k < 3; ++k) {
+    const std::string t = k == 0 ? next : token();
+    const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), counts[k]);
+    if (t.empty() || ec != std::errc() || end != t.data() + t.size() || counts[k] < 0 ||
+        counts[k] > INT_MAX)
+      c.fail("line 1", kBadHeader);
+  }
+  const auto nv = static_cast<std::size_t>(counts[0]), nf = static_cast<std::size_t>(counts[1]);
+  // Minimum bytes of a vertex ("0 0 0\n") and of a face ("3 0 1 2\n").
   constexpr std::uintmax_t kVertexBytes = 6, kFaceBytes = 8;
-  std::size_t nv = 0, nf = 0;
+  c.check_count("line 1", nv, "the header announces");
+  if (nv * kVertexBytes + nf * kFaceBytes > c.file_size)
+    c.fail("line 1", "the header announces " + std::to_string(nv) + " vertices and " +
+                         std::to_string(nf) + " faces, more than the " + num(c.file_size) +
+                         " bytes of the file can hold; the file is truncated");
+  // CGAL's estimate 2.1 (V + F + 10) must stay below 2^31.
+  if (static_cast<double>(nv + nf) > 1e9)
+    c.fail("line 1", "the header announces " + std::to_string(nv) + " vertices and " +
+                         std::to_string(nf) + " faces; OFF files are read only up to 10^9 vertices "
+                         "and faces together; convert the scan to PLY");
+  return {nv, nf};
+}
+
+Scan read_off(const Ctx& c) {
+  const auto [nv, nf] = read_off_header(c);
   {
+    // CGAL's own view of the (now bounded) header: the variants its reader gets wrong.
     std::ifstream is = open_binary(c);
     CGAL::File_scanner_OFF header(is, false);
     if (is.fail() || header.skel())
@@ -632,21 +704,11 @@ Scan read_off(const Ctx& c) {
       c.fail("line 1",
              "binary OFF and OFF with colours (C), texture coordinates (ST) or a dimension other "
              "than 3 are not supported; convert the scan to PLY or to plain ASCII OFF");
-    nv = header.size_of_vertices();
-    nf = header.size_of_facets();
+    if (header.size_of_vertices() != nv || header.size_of_facets() != nf)
+      c.fail("line 1", "CGAL reads this header differently (" + std::to_string(header.size_of_vertices()) +
+                           " vertices, " + std::to_string(header.size_of_facets()) +
+                           " faces); the header is malformed");
   }
-  const auto too_many = [&](std::size_t n, const char* what) {
-    if (n > static_cast<std::size_t>(INT_MAX))
-      c.fail("line 1", "the header announces " + signed_count(n) + " " + what +
-                           "; the count is negative or corrupt");
-    if (std::string_view(what) == "vertices") c.check_count("line 1", n, "the header announces");
-    c.fail("line 1", "the header announces " + std::to_string(nv) + " vertices and " +
-                         std::to_string(nf) + " faces, more than the " + num(c.file_size) +
-                         " bytes of the file can hold; the file is truncated");
-  };
-  if (nv > c.limit || nv > static_cast<std::size_t>(INT_MAX)) too_many(nv, "vertices");
-  if (nf > static_cast<std::size_t>(INT_MAX)) too_many(nf, "faces");
-  if (nv * kVertexBytes + nf * kFaceBytes > c.file_size) too_many(nv, "vertices");
 
   std::ifstream is = open_binary(c);
   OffPoints points;
