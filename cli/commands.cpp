@@ -17,6 +17,7 @@
 #include <charconv>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <cstdio>
 #include <iostream>
 #include <iterator>
@@ -376,8 +377,43 @@ int fit_and_write(const FitCommandOptions& o, ParameterizedScan* pscan, const Sc
 
 }  // namespace
 
-int run_fit(const FitCommandOptions& o) {
+uint64_t available_memory() {
+  auto read_number = [](const char* path, uint64_t& value) {
+    std::ifstream f(path);
+    std::string text;
+    if (!(f >> text)) return false;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+    return ec == std::errc() && end == text.data() + text.size();
+  };
+  uint64_t available = 0;
+  {
+    std::ifstream f("/proc/meminfo");
+    std::string key, unit;
+    uint64_t kib = 0;
+    while (f >> key >> kib) {
+      std::getline(f, unit);
+      if (key == "MemAvailable:") {
+        available = kib * 1024;
+        break;
+      }
+    }
+  }
+  // cgroup v2, then v1: limit minus usage.
+  uint64_t limit = 0, used = 0;
+  if ((read_number("/sys/fs/cgroup/memory.max", limit) && read_number("/sys/fs/cgroup/memory.current", used)) ||
+      (read_number("/sys/fs/cgroup/memory/memory.limit_in_bytes", limit) &&
+       read_number("/sys/fs/cgroup/memory/memory.usage_in_bytes", used))) {
+    const uint64_t room = limit > used ? limit - used : 0;
+    if (room > 0 && (available == 0 || room < available)) available = room;
+  }
+  return available;
+}
+
+int run_fit(const FitCommandOptions& given) {
   namespace fs = std::filesystem;
+  FitCommandOptions o = given;
+  o.fit.max_memory = given.max_memory > 0 ? given.max_memory : available_memory();
+  o.fit.max_memory_name = "--max-memory";
   std::error_code ec;
   if (fs::exists(o.output, ec) && fs::exists(o.input, ec) && fs::equivalent(o.input, o.output, ec))
     throw InvalidInput(o.output + ": the output would overwrite the input; choose another -o path");
@@ -396,6 +432,8 @@ int run_fit(const FitCommandOptions& o) {
 
   say("tbs fit: reading " + o.input);
   const Scan scan = read_scan(o.input, {.max_points = o.max_points, .limit_name = "--max-points"});
+  // Refused before parameterization and fitting; fit() checks again (subdivided meshes grow).
+  check_fit_memory(o.input, scan.positions.size(), o.fit);
   if (scan.has_uv()) {
     if (o.component > 0 || o.all_components)
       say("tbs fit: the scan has parameters (u, v); --component and --all-components apply only to scans without them");

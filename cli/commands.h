@@ -3,6 +3,7 @@
 
 #include <tbs/fit.h>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -48,11 +49,18 @@ struct FitCommandOptions {
   std::string flatten = "auto";  // auto, lscm or mean-value
   size_t min_points = 5000;      // subdivide coarser meshes when their vertices are not enough
   size_t max_points = kDefaultMaxPoints;  // larger scans are refused before they are read
+  // Memory limit in bytes for the fit (FitOptions::max_memory); 0: the memory available when
+  // the command starts (available_memory()).
+  uint64_t max_memory = 0;
   bool quiet = false;
   std::vector<std::string> exports;  // files to convert the result to, as `tbs convert` does
   FitOptions fit;  // the library's defaults are the command's defaults
 };
 int run_fit(const FitCommandOptions& o);
+
+// Bytes of memory this process can still use: MemAvailable of /proc/meminfo, or less when a
+// cgroup (a container, a systemd slice) limits it. 0 when neither can be read.
+uint64_t available_memory();
 
 struct ConvertOptions {
   std::string input;

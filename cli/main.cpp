@@ -119,6 +119,11 @@ int main(int argc, char** argv) {
                       "Refuse scans with more points than this, before reading them (a fit takes about "
                       "1 KB of memory per point)")
       ->check(CLI::PositiveNumber)->capture_default_str();
+  fit_cmd->add_option("--max-memory", fit.max_memory,
+                      "Memory limit for the fit, e.g. 8G or 512M (0 = the memory available when tbs starts, "
+                      "within a container's limit): a fit estimated to need more is refused before it starts, "
+                      "and refinement stops before it would need more")
+      ->transform(CLI::AsSizeValue(false))->capture_default_str();
   fit_cmd->add_option("--min-points", fit.min_points,
                       "Scans without (u, v): when a mesh's vertices do not reach the tolerance within the "
                       "control-point budget, it is subdivided 1-to-4 (new points on a smooth surface through "

@@ -15,6 +15,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <memory>
 #include <numeric>
@@ -110,6 +111,7 @@ std::string FitReport::to_json(bool with_times) const {
   j["iterations"] = iterations;
   j["normals_estimated"] = normals_estimated;
   if (with_times) {
+    j["memory_estimate"] = memory_estimate;
     j["seconds"] = seconds;
     nlohmann::ordered_json st = nlohmann::ordered_json::object();
     for (const auto& [k, v] : stage_seconds) st[k] = v;
@@ -125,11 +127,76 @@ std::string FitReport::to_json(bool with_times) const {
   return j.dump(2);
 }
 
+namespace {
+
+// The memory model of estimate_fit_memory(): bytes = base + points * (p0 + p1 b) +
+// control points * (c0 + c1 b), b = beta_count(n) (basis functions per triangle), fitted to the
+// peak resident sets of `tbs fit` on synthetic scans (docs/benchmarks.md, "Memory"), then
+// times kMemorySafety.
+constexpr double kMemoryBase = 40e6;
+constexpr double kMemoryPerPoint = 400, kMemoryPerPointPerBasis = 60;
+constexpr double kMemoryPerControlPoint = 2000, kMemoryPerControlPointPerBasis = 1000;
+constexpr double kMemorySafety = 1.25;
+
+std::string format_bytes(double bytes) {
+  char s[32];
+  if (bytes >= 1 << 30)
+    std::snprintf(s, sizeof s, "%.1f GiB", bytes / (1 << 30));
+  else
+    std::snprintf(s, sizeof s, "%.0f MiB", std::max(1.0, bytes / (1 << 20)));
+  return s;
+}
+
+}  // namespace
+
+size_t estimate_fit_memory(size_t points, int degree, size_t control_points) {
+  const double b = beta_count(std::clamp(degree, 1, tol::kMaxDegree));
+  const double bytes = kMemoryBase + static_cast<double>(points) * (kMemoryPerPoint + kMemoryPerPointPerBasis * b) +
+                       static_cast<double>(control_points) * (kMemoryPerControlPoint + kMemoryPerControlPointPerBasis * b);
+  return static_cast<size_t>(std::min(bytes * kMemorySafety, 1e19));
+}
+
+size_t initial_control_points(size_t points, const FitOptions& options) {
+  const double triangles = options.triangles > 0 ? options.triangles
+                                                 : std::clamp(static_cast<double>(points / 200), 32.0, 4000.0);
+  // A disk-like triangulation has about F/2 vertices and 3F/2 edges for F triangles; a control
+  // point per vertex, n - 1 per edge and (n - 1)(n - 2)/2 inside each triangle.
+  const double n = std::clamp(options.degree, 1, tol::kMaxDegree);
+  return static_cast<size_t>(triangles * (0.5 + 1.5 * (n - 1) + (n - 1) * (n - 2) / 2) + 0.5);
+}
+
+void check_fit_memory(const std::string& name, size_t points, const FitOptions& options) {
+  if (options.max_memory == 0) return;
+  const size_t need = estimate_fit_memory(points, options.degree, initial_control_points(points, options));
+  if (need <= options.max_memory) return;
+  throw InvalidInput(name + ": fitting " + std::to_string(points) + " points at degree " +
+                     std::to_string(options.degree) + " needs about " + format_bytes(need) +
+                     " of memory, more than the limit of " + format_bytes(options.max_memory) + " (" +
+                     options.max_memory_name + "); fit a decimated or cropped scan" +
+                     (options.degree > 2 ? ", use a lower degree" : "") + ", or raise " +
+                     options.max_memory_name + " if the machine has that much memory free");
+}
+
+namespace {
+
+// The most control points a fit of `points` points at degree n can have within `max_memory`
+// (0 = no limit: the largest size_t).
+size_t affordable_control_points(size_t points, int degree, size_t max_memory) {
+  if (max_memory == 0) return std::numeric_limits<size_t>::max();
+  const size_t fixed = estimate_fit_memory(points, degree, 0);
+  if (fixed >= max_memory) return 0;
+  const size_t per = estimate_fit_memory(points, degree, 1'000'000) - fixed;  // per million
+  return static_cast<size_t>(static_cast<double>(max_memory - fixed) / static_cast<double>(per) * 1e6);
+}
+
+}  // namespace
+
 FitResult fit(const Scan& scan, const FitOptions& opt) {
   const auto t_start = Clock::now();
   check_options(opt);
   const std::string name = scan.source.empty() ? "<scan>" : scan.source;
   const size_t N = scan.positions.size();
+  check_fit_memory(name, N, opt);
   if (!scan.has_uv())
     throw InvalidInput(name + ": this input has no parameters (u, v); compute them with "
                        "parameterize_scan() (the tbs command does so), or give a PLY with u v (or s t, "
@@ -214,8 +281,10 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
   const double lambda = opt.fairness;
   std::vector<double> fair(N, 0.0);
   std::vector<double> bend;
-  const size_t max_cp = opt.max_control_points > 0 ? static_cast<size_t>(opt.max_control_points)
-                                                   : std::max<size_t>(N, 16);
+  const size_t budget_cp = opt.max_control_points > 0 ? static_cast<size_t>(opt.max_control_points)
+                                                      : std::max<size_t>(N, 16);
+  const size_t memory_cp = affordable_control_points(N, n, opt.max_memory);
+  const size_t max_cp = std::min(budget_cp, memory_cp);
 
   std::vector<Point2> uv(scan.uv.begin(), scan.uv.end());
   std::vector<int> located(N, -1);
@@ -402,6 +471,7 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
       rep.feature_edges = static_cast<int>(spline.domain().feature_edges().size());
       rep.holes = static_cast<int>(spline.domain().boundary_loops().size()) - 1;
       rep.control_points = spline.control_point_count();
+      rep.memory_estimate = estimate_fit_memory(N, n, static_cast<size_t>(rep.control_points));
       res.spline = std::move(spline);
     };
     if (e.max <= rep.tolerance_abs) {
@@ -427,7 +497,12 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
                             ? (max_cp - spline.control_point_count()) / per_split
                             : 0;
     if (room == 0) {
-      finish(false, "control-point budget (" + std::to_string(max_cp) + ") reached");
+      if (memory_cp < budget_cp)
+        finish(false, "memory limit (" + format_bytes(static_cast<double>(opt.max_memory)) + ", " +
+                          opt.max_memory_name + ") reached at " + std::to_string(spline.control_point_count()) +
+                          " control points");
+      else
+        finish(false, "control-point budget (" + std::to_string(max_cp) + ") reached");
       break;
     }
     if (bad.size() > room) bad.resize(room);

@@ -588,6 +588,23 @@ TEST(CliFit, MaxPointsRefusesLargerScans) {
   EXPECT_FALSE(fs::exists(dir / "m.tbs"));
 }
 
+TEST(CliFit, MaxMemoryRefusesFitsThatWouldNotFit) {
+  const fs::path dir = temp_dir();
+  const std::string scan = std::string(TBS_SOURCE_DIR) + "/samples/bracket.ply";
+  Result r = run("fit '" + scan + "' -o '" + (dir / "m.tbs").string() + "' --max-memory 20M -q");
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("bracket.ply: fitting 40933 points at degree 3 needs about"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("more than the limit of 20 MiB (--max-memory)"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "m.tbs"));
+  // A malformed size is a usage error.
+  r = run("fit '" + scan + "' -o '" + (dir / "m.tbs").string() + "' --max-memory lots -q");
+  EXPECT_EQ(r.code, 2) << r.err;
+  // Enough memory: the fit runs.
+  r = run("fit '" + scan + "' -o '" + (dir / "m.tbs").string() + "' --max-memory 4G -q");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir / "m.tbs"));
+}
+
 TEST(CliFit, ExportsInTheSameCall) {
   const fs::path dir = temp_dir();
   const std::string scan = scan_path();

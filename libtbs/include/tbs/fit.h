@@ -53,6 +53,13 @@ struct FitOptions {
   /// OptimizeKnot passes over the vertices after each control-point solve; 0 keeps the knots
   /// where the default placement puts them (fixed knots).
   int knot_sweeps = 1;
+  /// Memory limit in bytes, against estimate_fit_memory(): a fit expected to need more from the
+  /// start is refused (InvalidInput, see check_fit_memory()), and refinement stops before the
+  /// spline would need more (stop reason "memory limit"). 0 = no limit.
+  size_t max_memory = 0;
+  /// How messages name the memory limit, so that they say what to change (the tbs command
+  /// sets "--max-memory").
+  std::string max_memory_name = "FitOptions::max_memory";
   /// Worker threads; 0 = all cores. The result does not depend on it.
   int threads = 0;
   /// Called from the calling thread between steps. May be empty.
@@ -86,6 +93,9 @@ struct FitReport {
   std::string stop_reason;
   int iterations = 0;
   bool normals_estimated = false;
+  /// estimate_fit_memory() for the points, degree and control points of the result, in bytes
+  /// (in the JSON with the times: it describes the run, not the spline).
+  size_t memory_estimate = 0;
   double seconds = 0;
   /// Wall time per stage: normals, domain, solve, knots, refine, error.
   std::vector<std::pair<std::string, double>> stage_seconds;
@@ -110,9 +120,27 @@ struct FitResult {
   std::vector<double> error;    ///< |p - F(u)| per input point, model units
 };
 
+/// Estimated peak memory (bytes) of fit() on `points` points at degree n while its spline has
+/// `control_points` control points, the scan itself not included. A linear model fitted to the
+/// peaks measured on synthetic scans of 25k to 1M points at degrees 2 to 5 (docs/benchmarks.md,
+/// section "Memory"), plus a quarter for safety.
+size_t estimate_fit_memory(size_t points, int degree, size_t control_points);
+
+/// The control points of the initial domain fit() builds for `points` points (the domain
+/// builder aims at FitOptions::triangles, or points / 200 within [32, 4000]).
+size_t initial_control_points(size_t points, const FitOptions& options);
+
+/// Refuses, before any work, a fit expected to need more than options.max_memory:
+/// estimate_fit_memory(points, degree, initial_control_points()) > max_memory. fit() calls it;
+/// callers that prepare the scan first (parameterize_scan()) can call it before doing so.
+/// \throw InvalidInput `<name>: fitting N points at degree n needs about X of memory, more than
+///   the limit of Y (<max_memory_name>); ...` with what to change.
+void check_fit_memory(const std::string& name, size_t points, const FitOptions& options);
+
 /// Fits one DMS spline to a scan that has parameters.
 /// \throw InvalidInput if the scan has no parameters, too few points, degenerate or folded
-///        parameters, or options out of range; SolverError if the sparse solve fails.
+///        parameters, options out of range, or needs more memory than options.max_memory;
+///        SolverError if the sparse solve fails.
 FitResult fit(const Scan& scan, const FitOptions& options);
 
 }  // namespace tbs
