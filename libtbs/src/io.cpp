@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cerrno>
 #include <csignal>
 #include <mutex>
@@ -136,6 +137,13 @@ SplineFile parse_tbs(std::string_view text, const std::string& name, const ReadO
     std::string what = e.what();
     if (auto p = what.find("] "); p != std::string::npos) what = what.substr(p + 2);
     const auto* pe = dynamic_cast<const json::parse_error*>(&e);
+    // A scan handed to a command that reads splines (tbs info, tbs convert).
+    std::string ext = std::filesystem::path(name).extension().string();
+    for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    for (const char* scan : {".ply", ".obj", ".off", ".stl", ".xyz", ".txt"})
+      if (ext == scan)
+        throw InvalidInput(name + ": not a .tbs spline but a scan (" + ext.substr(1) +
+                           "), it seems; fit it first (tbs fit " + name + " -o OUT.tbs), then use OUT.tbs");
     throw InvalidInput(name + ": not valid JSON: " + printable(what) +
                        (pe && pe->byte >= text.size() ? " (the file looks truncated)" : ""));
   }

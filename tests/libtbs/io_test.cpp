@@ -218,6 +218,22 @@ TEST(Io, RejectsBrokenJsonText) {
   }
 }
 
+// A scan handed to a command that reads splines: say so, and what to do.
+TEST(Io, AScanInsteadOfASplineSaysToFitItFirst) {
+  for (const char* name : {"scan.ply", "SCAN.STL", "points.xyz"}) {
+    try {
+      parse_tbs("ply\nformat ascii 1.0\n", name);
+      ADD_FAILURE() << name << ": accepted";
+    } catch (const InvalidInput& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find("not a .tbs spline but a scan"), std::string::npos) << msg;
+      EXPECT_NE(msg.find(std::string("tbs fit ") + name + " -o OUT.tbs"), std::string::npos) << msg;
+    }
+  }
+  // Valid JSON in a file with a scan's extension is still read as a spline.
+  EXPECT_NO_THROW(parse_tbs(format_tbs(sample(2)), "spline.txt"));
+}
+
 TEST(Io, CanSkipTheKnotCheck) {
   json j = json::parse(format_tbs(sample(2)));
   const auto& tri = j["domain"]["triangles"][0];
