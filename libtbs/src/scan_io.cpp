@@ -21,6 +21,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
+#include <string>
 #include <string_view>
 #include <unordered_map>
 
@@ -708,6 +710,34 @@ Scan read_off(const Ctx& c) {
       c.fail("line 1", "CGAL reads this header differently (" + std::to_string(header.size_of_vertices()) +
                            " vertices, " + std::to_string(header.size_of_facets()) +
                            " faces); the header is malformed");
+    // CGAL's face reader converts every number of a face line to size_t, which is undefined
+    // for negative, non-finite or huge values (found by fuzzing). Read the lines as it does
+    // (vertex lines through its own scanner, then one line per face, '#' comments removed) and
+    // check the numbers first.
+    double x = 0, y = 0, z = 0, w = 0;
+    for (std::size_t i = 0; i < nv && is.good(); ++i) header.scan_vertex(x, y, z, w);
+    std::string line;
+    for (std::size_t f = 0; f < nf && is.good(); ++f) {
+      is >> CGAL::skip_comment_OFF;  // what the scanner's private skip_comment() does
+      if (!std::getline(is, line)) break;
+      if (const auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
+      std::istringstream numbers(line);
+      double value = 0;
+      std::size_t k = 0, corners = 0;
+      while (numbers >> value) {
+        if (k == 0) {
+          if (!(value >= 0 && value <= static_cast<double>(kMaxPolygonCorners) && value == std::floor(value)))
+            c.fail(Where{"face", f}, "the corner count " + num(value) + " is not a whole number from 3 to " +
+                                          std::to_string(kMaxPolygonCorners) + "; the file is corrupt");
+          corners = static_cast<std::size_t>(value);
+        } else if (k <= corners &&
+                   !(value >= 0 && value < static_cast<double>(nv) && value == std::floor(value))) {
+          c.fail(Where{"face", f}, "corner " + std::to_string(k - 1) + " is vertex " + num(value) +
+                                        ", not a whole number from 0 to " + std::to_string(nv) + " - 1");
+        }
+        ++k;
+      }
+    }
   }
 
   std::ifstream is = open_binary(c);

@@ -399,7 +399,14 @@ TEST(ScanIo, OffWithNormals) {
 
 TEST(ScanErrors, OffErrors) {
   expect_error(write("range.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n"),
-               "line 6: CGAL could not read");
+               "face 0: corner 2 is vertex 9, not a whole number from 0 to 3 - 1");
+  // Checked before CGAL's reader, which converts these to size_t (undefined behaviour).
+  expect_error(write("negative_index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 -2\n"),
+               "face 0: corner 2 is vertex -2");
+  expect_error(write("negative_count.off", "OFF\n3 1 0\n0 0 0\n# comment\n1 0 0\n0 1 0\n-100 1\n"),
+               "face 0: the corner count -100 is not a whole number");
+  expect_error(write("fractional.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1.5 2\n"),
+               "face 0: corner 1 is vertex 1.5");
   expect_error(write("short.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1\n"),
                "line 6: CGAL could not read");
   expect_error(write("truncated.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 1\n3 0 1 2\n"),
