@@ -129,13 +129,15 @@ std::string FitReport::to_json(bool with_times) const {
 
 namespace {
 
-// The memory model of estimate_fit_memory(): bytes = base + points * (p0 + p1 b) +
-// control points * (c0 + c1 b), b = beta_count(n) (basis functions per triangle), fitted to the
-// peak resident sets of `tbs fit` on synthetic scans (docs/benchmarks.md, "Memory"), then
-// times kMemorySafety.
-constexpr double kMemoryBase = 40e6;
-constexpr double kMemoryPerPoint = 400, kMemoryPerPointPerBasis = 60;
-constexpr double kMemoryPerControlPoint = 2000, kMemoryPerControlPointPerBasis = 1000;
+// The memory model of estimate_fit_memory(): bytes = base + points * p + control points * c
+// b^1.5, b = beta_count(n) (basis functions per triangle; the per-triangle systems, the
+// evaluator's graph and the sparse factor grow with it), fitted to the peak resident sets of
+// `tbs fit` on synthetic scans of 100k to 1M points at degrees 2 to 5 with 1,195 to 40,969
+// control points (bench/memory_bench.sh, docs/benchmarks.md "Memory"): within -8 % to +28 %
+// of every row before the safety factor.
+constexpr double kMemoryBase = 30e6;
+constexpr double kMemoryPerPoint = 360;
+constexpr double kMemoryPerControlPoint = 1000;  // times b^1.5
 constexpr double kMemorySafety = 1.25;
 
 std::string format_bytes(double bytes) {
@@ -151,8 +153,8 @@ std::string format_bytes(double bytes) {
 
 size_t estimate_fit_memory(size_t points, int degree, size_t control_points) {
   const double b = beta_count(std::clamp(degree, 1, tol::kMaxDegree));
-  const double bytes = kMemoryBase + static_cast<double>(points) * (kMemoryPerPoint + kMemoryPerPointPerBasis * b) +
-                       static_cast<double>(control_points) * (kMemoryPerControlPoint + kMemoryPerControlPointPerBasis * b);
+  const double bytes = kMemoryBase + static_cast<double>(points) * kMemoryPerPoint +
+                       static_cast<double>(control_points) * kMemoryPerControlPoint * b * std::sqrt(b);
   return static_cast<size_t>(std::min(bytes * kMemorySafety, 1e19));
 }
 
