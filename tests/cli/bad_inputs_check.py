@@ -4,7 +4,10 @@ and on a missing file and a directory. Each must end within 60 s and 2 GiB of ad
 with the exit code the manifest documents, one line on stderr of the form
 "tbs: error: ..." that names the file, and no file left in the output directory.
 
-    bad_inputs_check.py TBS_EXE SOURCE_DIR WORK_DIR [--markdown]
+    bad_inputs_check.py TBS_EXE SOURCE_DIR WORK_DIR [--markdown] [--sanitized]
+
+With --sanitized (an AddressSanitizer build, which reserves terabytes of address space) the
+memory bound is ASan's resident-memory limit of 2 GiB instead of the address-space limit.
 
 With --markdown it also prints the table of docs/robustness.md (run it from SOURCE_DIR with
 SOURCE_DIR = . so that the messages show paths relative to it).
@@ -18,6 +21,10 @@ import sys
 
 tbs, source, work = sys.argv[1], sys.argv[2], sys.argv[3]
 markdown = "--markdown" in sys.argv[4:]
+sanitized = "--sanitized" in sys.argv[4:]
+env = dict(os.environ)
+if sanitized:
+    env["ASAN_OPTIONS"] = ":".join(filter(None, [env.get("ASAN_OPTIONS", ""), "hard_rss_limit_mb=2048"]))
 rows = []
 bad = os.path.join(source, "tests", "data", "bad")
 cases = json.load(open(os.path.join(bad, "cases.json")))
@@ -27,6 +34,8 @@ cases.append({"file": "a_directory.ply", "command": "fit", "exit": 4, "what": "a
 
 
 def limits():
+    if sanitized:
+        return
     resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))
 
 
@@ -41,7 +50,8 @@ for c in cases:
     else:
         cmd = [tbs, c["command"], path]
     try:
-        r = subprocess.run(cmd, capture_output=True, text=True, errors="replace", timeout=60, preexec_fn=limits)
+        r = subprocess.run(cmd, capture_output=True, text=True, errors="replace", timeout=60, preexec_fn=limits,
+                           env=env)
     except subprocess.TimeoutExpired:
         failures.append("%s (%s): no answer within 60 s" % (c["file"], c["what"]))
         continue

@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# Fuzzes every scan reader and the .tbs parser with libFuzzer (clang, from Debian), under
+# AddressSanitizer and UndefinedBehaviorSanitizer.
+#
+#   scripts/fuzz.sh [-t SECONDS] [HARNESS...]     HARNESS: ply obj off stl xyz tbs (default: all)
+#
+# Each harness runs SECONDS (default 60) from a corpus in build-asan/fuzz/corpus/HARNESS, seeded
+# with tests/fuzz/seeds, the bad-input corpus tests/data/bad, the committed regressions
+# tests/data/fuzz and the samples, and kept between runs. A failing input is saved under
+# build-asan/fuzz/crashes/HARNESS/; the script then prints how to replay it and where to commit
+# it as a regression test (tests/data/fuzz/, replayed by the Fuzz.*.Regressions tests).
+# Exit status: 0 when no harness failed, 1 otherwise.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=60
+while getopts "t:h" opt; do
+  case $opt in
+    t) seconds=$OPTARG ;;
+    *) sed -n '2,12p' "$0"; exit 2 ;;
+  esac
+done
+shift $((OPTIND - 1))
+all=(ply obj off stl xyz tbs)
+harnesses=("${@:-${all[@]}}")
+for h in "${harnesses[@]}"; do
+  [[ " ${all[*]} " == *" $h "* ]] || { echo "fuzz.sh: unknown harness '$h' (one of: ${all[*]})" >&2; exit 2; }
+done
+[[ "$seconds" =~ ^[1-9][0-9]*$ ]] || { echo "fuzz.sh: -t wants a positive number of seconds, got '$seconds'" >&2; exit 2; }
+
+source scripts/deps.sh
+tbs_install_deps "${TBS_TEST_PACKAGES[@]}"
+jobs="$(nproc 2>/dev/null || echo 2)"
+cmake --preset asan >/dev/null
+cmake --build --preset asan --parallel "$jobs" --target "${harnesses[@]/#/tbs_fuzz_}"
+
+work=build-asan/fuzz
+failed=()
+for h in "${harnesses[@]}"; do
+  corpus=$work/corpus/$h crashes=$work/crashes/$h
+  mkdir -p "$corpus" "$crashes"
+  # Seeds: every file whose extension is the harness's (upper or lower case).
+  find tests/fuzz/seeds tests/data/bad tests/data/fuzz samples -maxdepth 1 -type f -iname "*.$h" \
+    -exec cp -n -t "$corpus" {} +
+  echo "fuzz.sh: $h for ${seconds} s ($(find "$corpus" -type f | wc -l) inputs in the corpus)"
+  status=0
+  ASAN_OPTIONS="detect_leaks=1:${ASAN_OPTIONS:-}" \
+    UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1" \
+    LSAN_OPTIONS="suppressions=$PWD/tests/sanitizers/lsan.supp:print_suppressions=0" \
+    "build-asan/tests/fuzz/tbs_fuzz_$h" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+    -max_len=16384 -dict="tests/fuzz/dict/$h.dict" -artifact_prefix="$crashes/" -print_final_stats=1 \
+    "$corpus" > "$work/$h.log" 2>&1 || status=$?
+  grep -E "^stat::number_of_executed_units|^stat::peak_rss_mb|^#[0-9]+ *DONE" "$work/$h.log" | sed "s/^/  /" || true
+  if [ "$status" -ne 0 ]; then
+    failed+=("$h")
+    echo "fuzz.sh: $h FAILED (exit $status); log: $work/$h.log" >&2
+    grep -E "ERROR: |SUMMARY: |runtime error|breaks an invariant|uncaught exception|what\(\)" "$work/$h.log" | head -5 >&2 || true
+    for f in "$crashes"/*; do
+      [ -f "$f" ] || continue
+      echo "  replay:  build-asan/tests/fuzz/tbs_fuzz_$h $f" >&2
+      echo "  keep it: cp $f tests/data/fuzz/$h-$(basename "$f" | cut -c1-20).$h" >&2
+    done
+  fi
+done
+if [ ${#failed[@]} -gt 0 ]; then
+  echo "fuzz.sh: failures in: ${failed[*]}" >&2
+  exit 1
+fi
+echo "fuzz.sh: no failure in ${harnesses[*]} (${seconds} s each)"
