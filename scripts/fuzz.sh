@@ -7,8 +7,9 @@
 # Each harness runs SECONDS (default 60) from a corpus in build-asan/fuzz/corpus/HARNESS, seeded
 # with tests/fuzz/seeds, the bad-input corpus tests/data/bad, the committed regressions
 # tests/data/fuzz and the samples, and kept between runs. A failing input is saved under
-# build-asan/fuzz/crashes/HARNESS/; the script then prints how to replay it and where to commit
-# it as a regression test (tests/data/fuzz/, replayed by the Fuzz.*.Regressions tests).
+# build-asan/fuzz/crashes/HARNESS/ (emptied at the start of each run); the script then prints
+# how to replay it and where to commit it as a regression test (tests/data/fuzz/, replayed by
+# the Fuzz.*.Regressions tests).
 # Exit status: 0 when no harness failed, 1 otherwise.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -16,7 +17,7 @@ seconds=60
 while getopts "t:h" opt; do
   case $opt in
     t) seconds=$OPTARG ;;
-    *) sed -n '2,12p' "$0"; exit 2 ;;
+    *) sed -n '2,13p' "$0"; exit 2 ;;
   esac
 done
 shift $((OPTIND - 1))
@@ -37,6 +38,7 @@ work=build-asan/fuzz
 failed=()
 for h in "${harnesses[@]}"; do
   corpus=$work/corpus/$h crashes=$work/crashes/$h
+  rm -rf "$crashes"  # failures of earlier runs: replayed from tests/data/fuzz once kept
   mkdir -p "$corpus" "$crashes"
   # Seeds: every file whose extension is the harness's (upper or lower case).
   find tests/fuzz/seeds tests/data/bad tests/data/fuzz samples -maxdepth 1 -type f -iname "*.$h" \

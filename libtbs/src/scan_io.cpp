@@ -672,6 +672,10 @@ std::pair<std::size_t, std::size_t> read_off_header(const Ctx& c) {
         counts[k] > INT_MAX)
       c.fail("line 1", kBadHeader);
   }
+  // CGAL doubles the edge count in int arithmetic; the count is otherwise unused.
+  if (counts[2] > INT_MAX / 2)
+    c.fail("line 1", "the edge count " + std::to_string(counts[2]) +
+                         " is out of range (at most 2^30); readers ignore it, so set it to 0");
   const auto nv = static_cast<std::size_t>(counts[0]), nf = static_cast<std::size_t>(counts[1]);
   // Minimum bytes of a vertex ("0 0 0\n") and of a face ("3 0 1 2\n").
   constexpr std::uintmax_t kVertexBytes = 6, kFaceBytes = 8;

@@ -401,6 +401,8 @@ TEST(ScanErrors, OffErrors) {
   expect_error(write("range.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n"),
                "face 0: corner 2 is vertex 9, not a whole number from 0 to 3 - 1");
   // Checked before CGAL's reader, which converts these to size_t (undefined behaviour).
+  expect_error(write("edges.off", "OFF\n3 1 001920497493\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+               "line 1: the edge count 1920497493 is out of range");
   expect_error(write("negative_index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 -2\n"),
                "face 0: corner 2 is vertex -2");
   expect_error(write("negative_count.off", "OFF\n3 1 0\n0 0 0\n# comment\n1 0 0\n0 1 0\n-100 1\n"),
