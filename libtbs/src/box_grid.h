@@ -34,8 +34,8 @@ class BoxGrid {
     const double w = std::max(ext.x(), 1e-300), h = std::max(ext.y(), 1e-300);
     const double cells = static_cast<double>(std::max<size_t>(target_cells, 1));
     const double cell = std::sqrt(w * h / cells);
-    nx_ = std::clamp(static_cast<long>(std::ceil(w / std::max(cell, 1e-300))), 1L, 4096L);
-    ny_ = std::clamp(static_cast<long>(std::ceil(h / std::max(cell, 1e-300))), 1L, 4096L);
+    nx_ = cells_across(std::ceil(w / std::max(cell, 1e-300)));
+    ny_ = cells_across(std::ceil(h / std::max(cell, 1e-300)));
     sx_ = static_cast<double>(nx_) / w;
     sy_ = static_cast<double>(ny_) / h;
 
@@ -80,11 +80,20 @@ class BoxGrid {
   }
 
  private:
-  long cx(double x) const {
-    return std::clamp(static_cast<long>((x - extent_.min.x()) * sx_), 0L, nx_ - 1);
+  long cx(double x) const { return index_in((x - extent_.min.x()) * sx_, nx_); }
+  long cy(double y) const { return index_in((y - extent_.min.y()) * sy_, ny_); }
+  // Both clamp in floating point first: converting a value beyond the range of long (boxes
+  // reaching 1e68, or 1e154 times wider than high, from far knots) is undefined behaviour
+  // (found by fuzzing .tbs files).
+  static long index_in(double f, long n) {
+    if (!(f > 0)) return 0;
+    if (f >= static_cast<double>(n - 1)) return n - 1;
+    return static_cast<long>(f);
   }
-  long cy(double y) const {
-    return std::clamp(static_cast<long>((y - extent_.min.y()) * sy_), 0L, ny_ - 1);
+  static long cells_across(double f) {
+    if (!(f >= 1)) return 1;
+    if (f >= 4096) return 4096;
+    return static_cast<long>(f);
   }
 
   Box2 extent_;

@@ -75,6 +75,9 @@ struct Reader {
                      (v.is_null() ? " (NaN and infinity are not allowed)" : ""));
     const double x = v.get<double>();
     if (!std::isfinite(x)) fail(path, "number is not finite");
+    // As for scans: beyond this, products in the knot checks and the evaluator overflow
+    // (a sub-knot at 1e308 passed the checks and evaluated to infinity; found by fuzzing).
+    if (std::abs(x) > 1e30) fail(path, "the number " + v.dump() + " is larger than 1e30 in magnitude");
     return x;
   }
 

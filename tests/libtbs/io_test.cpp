@@ -203,6 +203,7 @@ TEST(Io, RejectsBrokenJsonText) {
       {"", "truncated"},
       {"{\"format\": \"tbs\", \"version\": 1, \"degree\": NaN}", "not valid JSON"},
       {"{\"format\": \"tbs\", \"version\": 1, \"degree\": 3, \"domain\": {\"vertices\": [[1e400, 0]]}}", "number overflow"},
+      {"{\"format\": \"tbs\", \"version\": 1, \"degree\": 3, \"domain\": {\"vertices\": [[1.1e308, 0]]}}", "larger than 1e30"},
       {std::string("\x89PNG\r\n\x1a\n\0\0", 10), "not valid JSON"},
   };
   for (const auto& [t, expect] : cases) {
