@@ -25,4 +25,6 @@ echo "tbs: the sanitized build (CMake preset asan, in build-asan/)" >&2
 cmake --preset asan >/dev/null
 cmake --build --preset asan --parallel "$jobs"
 ctest --preset asan --parallel "$jobs"
-scripts/fuzz.sh -t "${TBS_FUZZ_SECONDS:-10}"
+# A short, repeatable fuzz run (fixed seed and number of inputs, 60 s at most per harness); run
+# scripts/fuzz.sh without -r/-s to explore.
+scripts/fuzz.sh -r "${TBS_FUZZ_RUNS:-40000}" -s 1 -t 60

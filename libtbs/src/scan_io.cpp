@@ -623,23 +623,28 @@ std::pair<std::size_t, std::size_t> read_off_header(const Ctx& c) {
       "not a valid OFF header (expected OFF, NOFF, 4OFF or 4NOFF, then the vertex, face and edge "
       "counts, each below 2^31)";
   std::ifstream is = open_binary(c);
-  // Tokens of the header; '#' starts a comment to the end of the line.
+  // Tokens of the header; '#' starts a comment to the end of the line. A token is always read
+  // whole: splitting a long one would read numbers CGAL reads differently (41 digits with
+  // leading zeros are one count to CGAL; found by fuzzing). An overlong token comes back empty,
+  // which no header accepts.
   auto token = [&is]() {
+    constexpr std::size_t kLongest = 32;  // no valid header token is this long
     std::string t;
+    bool overlong = false;
     char ch;
     while (is.get(ch)) {
       if (ch == '#') {
-        if (!t.empty()) break;
+        if (!t.empty() || overlong) break;
         while (is.get(ch) && ch != '\n') {
         }
       } else if (std::isspace(static_cast<unsigned char>(ch))) {
-        if (!t.empty()) break;
+        if (!t.empty() || overlong) break;
       } else {
-        t += ch;
-        if (t.size() > 32) break;  // no header token is this long
+        if (t.size() == kLongest) overlong = true;
+        if (!overlong) t += ch;
       }
     }
-    return t;
+    return overlong ? std::string() : t;
   };
   const std::string keyword = token();
   // [ST][C][N][4][n]OFF
