@@ -9,7 +9,7 @@
 
 namespace tbs::cli {
 
-/// Documented exit codes (README.md, docs/cli.md).
+/// Documented exit codes (README.md, docs/user-guide.md#exit-codes).
 enum Exit : int {
   kOk = 0,
   kUsage = 2,         // bad command line

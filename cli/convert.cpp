@@ -257,8 +257,7 @@ int run_convert(const ConvertOptions& o) {
 
   TrianglePatchSet patches;
   std::string kind;
-  double deviation = 0, normal_deviation = 0, tolerance = 0;
-  bool within = true;
+  double deviation = 0, normal_deviation = 0, tolerance = 0, normal_limit = 0;
   if (o.exact) {
     say("extracting the exact Bezier pieces");
     const Extraction x = extract_bezier(s, {.threads = o.threads});
@@ -272,13 +271,17 @@ int run_convert(const ConvertOptions& o) {
     co.angle_tolerance = o.angle_tolerance;
     co.max_patches = o.max_patches;
     co.threads = o.threads;
+    if (o.max_patches < s.domain().triangle_count())
+      throw InvalidInput(o.input + ": the spline has " + std::to_string(s.domain().triangle_count()) +
+                         " domain triangles, more than --max-patches " + std::to_string(o.max_patches) +
+                         " (at least one patch per triangle); raise --max-patches");
     const CadPatches c = make_cad_patches(s, co);
     patches = patch_set(c);
     kind = "compact patches, degree " + std::to_string(c.degree);
     deviation = c.max_position_deviation;
     normal_deviation = c.max_normal_deviation;
     tolerance = c.tolerance;
-    within = c.within_tolerance;
+    normal_limit = c.angle_tolerance / 2;
     char line[400];
     if (c.max_position_deviation > c.tolerance) {
       std::snprintf(line, sizeof line,
@@ -308,9 +311,11 @@ int run_convert(const ConvertOptions& o) {
   std::printf("%-18s %zu B-spline faces, %zu shell%s, %zu free edges\n", "shape", r.faces, r.shells,
               r.shells == 1 ? "" : "s", r.free_edges);
   if (!o.exact) {
+    // Each line marks the tolerance it misses.
     std::printf("%-18s %.3g %s (tolerance %.3g)%s\n", "max deviation", deviation, eo.units.c_str(), tolerance,
-                within ? "" : "  NOT WITHIN TOLERANCE");
-    std::printf("%-18s %.3g degrees\n", "max normal dev.", normal_deviation);
+                deviation > tolerance ? "  NOT WITHIN TOLERANCE" : "");
+    std::printf("%-18s %.3g degrees (limit %.3g)%s\n", "max normal dev.", normal_deviation, normal_limit,
+                normal_deviation > normal_limit ? "  NOT WITHIN TOLERANCE" : "");
   }
   std::printf("%-18s %s\n", "units", eo.units.c_str());
   std::printf("%-18s %.2f s\n", "time", seconds);

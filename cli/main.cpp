@@ -135,7 +135,7 @@ int main(int argc, char** argv) {
                     "error maps and heat maps without --points (the file grows by about 100 bytes a point)");
   fit_cmd->add_option("--export", fit.exports,
                       "Also write the result to this file, as 'tbs convert OUT.tbs FILE' does with "
-                      "its defaults (.step .stp .iges .igs .glb .gltf, or .exr: the error map of this "
+                      "its defaults (.step .stp .iges .igs .glb .gltf .obj .ply, or .exr: the error map of this "
                       "scan); repeatable");
 
   ConvertOptions convert;

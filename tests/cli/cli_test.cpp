@@ -669,6 +669,12 @@ TEST(CliConvert, BadRequestsFailCleanly) {
   EXPECT_EQ(r.code, 3);
   EXPECT_NE(r.err.find("patch degree 2 is out of range"), std::string::npos) << r.err;
   EXPECT_EQ(read_file(keep.string()), "old");
+  // A patch budget below one patch per domain triangle: invalid input, naming the file.
+  r = run("convert '" + in + "' '" + keep.string() + "' --max-patches 1");
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find(in + ": the spline has "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("raise --max-patches"), std::string::npos) << r.err;
+  EXPECT_EQ(read_file(keep.string()), "old");
   // The input itself as output.
   EXPECT_EQ(run("convert '" + in + "' '" + in + "' --format step").code, 3);
   // No temporary files left in the folder.
