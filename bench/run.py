@@ -3,7 +3,7 @@
 approxSurface and OpenCASCADE's plate surface. Writes the results into docs/benchmarks.md
 (between the `bench/run.py` markers) and PNG plots into docs/img/.
 
-  python3 bench/run.py [quick|full] [--no-peers] [--no-docs] [--work DIR]
+  python3 bench/run.py [quick|full] [--no-peers] [--no-docs] [--work DIR] [--from-json]
 
 quick: synthetic scans of 25k and 50k points and four small libcgal-demo meshes (about 10
        minutes on 2 cores, most of it FreeCAD).
@@ -149,8 +149,10 @@ def fmt_stages(s):
 
 
 def table1(fits):
+    keys = sorted({fmt_stages(f["report"]["stage_seconds"])[1] for f in fits if "error" not in f["report"]})
+    header = keys[0].replace("/", " / ") if len(keys) == 1 else "time per stage"
     lines = ["| scan | points | degree | domain triangles | control points | max error | RMS error | "
-             "converged | time (s) | time per stage (s) | peak memory (MiB) |",
+             "converged | time (s) | %s (s) | peak memory (MiB) |" % header,
              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for f in fits:
         r = f["report"]
@@ -158,19 +160,19 @@ def table1(fits):
             lines.append("| %s | %s | %d | failed: %s | | | | | | | |" % (f["name"], fmt_int(f["points"]), f["degree"],
                                                                     r["error"].replace("|", "\\|")))
             continue
-        stages, keys = fmt_stages(r["stage_seconds"])
-        lines.append("| %s | %s | %d | %s | %s | %.2e | %.2e | %s | %.1f | %s: %s | %.0f |" % (
+        stages, order = fmt_stages(r["stage_seconds"])
+        lines.append("| %s | %s | %d | %s | %s | %.2e | %.2e | %s | %.1f | %s | %.0f |" % (
             f["name"], fmt_int(r["points"]), r["degree"], fmt_int(r["domain_triangles"]),
             fmt_int(r["control_points"]), r["max_error"], r["rms_error"],
-            "yes" if r["converged"] else "no (%s)" % r["stop_reason"], r["seconds"], keys, stages,
-            r["peak_mib"]))
+            "yes" if r["converged"] else "no (%s)" % r["stop_reason"], r["seconds"],
+            stages if len(keys) == 1 else order + ": " + stages, r["peak_mib"]))
     return lines
 
 
 def side_by_side(cases):
     lines = ["| scan | surface | control points | max distance | RMS distance | time (s) | "
-             "max / tbs | RMS / tbs | time / tbs |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "max / tbs | RMS / tbs | time / tbs | mesh chordal dev. |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     labels = {"tbs": "tbs (triangular, cubic)", "freecad_same": "approxSurface, as many poles",
               "freecad_12": "approxSurface, 12 x 12", "plate": "plate (1,000 constraints)"}
     for c in cases:
@@ -181,16 +183,17 @@ def side_by_side(cases):
                 continue
             if "error" in r:
                 cps = fmt_int(r["control_points"]) if "control_points" in r else ""
-                lines.append("| %s | %s | %s | %s | | | | | |" % (c["name"], labels[key], cps, r["error"]))
+                lines.append("| %s | %s | %s | %s | | | | | | |" % (c["name"], labels[key], cps, r["error"]))
                 continue
             d, b = r["distance"], base["distance"]
             if "error" in d or "error" in b:
-                lines.append("| %s | %s | %s | distance failed | | | | | |" % (c["name"], labels[key],
+                lines.append("| %s | %s | %s | distance failed | | | | | | |" % (c["name"], labels[key],
                                                                              fmt_int(r["control_points"])))
                 continue
-            lines.append("| %s | %s | %s | %.2e | %.2e | %.2f | %.2f | %.2f | %.1f |" % (
+            lines.append("| %s | %s | %s | %.2e | %.2e | %.2f | %.2f | %.2f | %.1f | %.1e |" % (
                 c["name"], labels[key], fmt_int(r["control_points"]), d["max"], d["rms"], r["seconds"],
-                d["max"] / b["max"], d["rms"] / b["rms"], r["seconds"] / max(base["seconds"], 1e-3)))
+                d["max"] / b["max"], d["rms"] / b["rms"], r["seconds"] / max(base["seconds"], 1e-3),
+                d["chordal_deviation"]))
     return lines
 
 
@@ -206,11 +209,12 @@ def distance_maps(cases):
         slug = re.sub(r"[^a-z0-9]+", "-", c["name"].lower()).strip("-")
         png = os.path.join(IMG, "distance-%s.png" % slug)
         titles = {"tbs": "tbs", "freecad_same": "approxSurface", "plate": "plate"}
-        cmds = ["set terminal pngcairo size %d,420" % (380 * len(panels)), "set output '%s'" % png,
+        cmds = ["set terminal pngcairo size %d,420 noenhanced" % (380 * len(panels)), "set output '%s'" % png,
                 "set multiplot layout 1,%d title '%s: distance from each point to the surface "
                 "(of the model size)'" % (len(panels), c["name"]),
                 "set logscale cb", "set cbrange [1e-5:1e-1]", "set format cb '%.0e'", "unset key",
-                "set size ratio -1", "set palette defined (0 'blue', 1 'cyan', 2 'yellow', 3 'red')"]
+                "set size ratio -1", "set palette defined (0 'blue', 1 'cyan', 2 'yellow', 3 'red')",
+                "set xtics 0.5", "set ytics 0.5"]
         for k, r in panels:
             cmds += ["set title '%s, max %.1e'" % (titles[k], r["distance"]["max"]),
                      "plot '%s' using 1:2:($3 < 1e-5 ? 1e-5 : $3) with points pt 7 ps 0.15 palette" % r["dump"]]
@@ -242,7 +246,7 @@ def plots(fits, work):
         plot.append("'%s' using 1:2 with linespoints title '%s'" % (path, label))
     if plot:
         png = os.path.join(IMG, "time-vs-points.png")
-        script = ("set terminal pngcairo size 800,560; set output '%s'; set logscale xy; set grid;"
+        script = ("set terminal pngcairo size 800,560 noenhanced; set output '%s'; set logscale xy; set grid;"
                   "set xlabel 'points'; set ylabel 'fit time (s)'; set key top left;"
                   "set title 'tbs fit: time against points (2 cores)'; plot %s" % (png, ", ".join(plot)))
         subprocess.run(["gnuplot", "-e", script], check=True)
@@ -257,12 +261,13 @@ def plots(fits, work):
         with open(path, "w") as fh:
             for rd in r["rounds"]:
                 fh.write("%d %g %g\n" % (rd["control_points"], rd["max_error"], rd["rms_error"]))
-        plot.append("'%s' using 1:2 with linespoints title '%s, degree %d'" % (path, f["name"], f["degree"]))
+        label = f["name"] if f["kind"] == "mesh" else "%s, %s points" % (f["kind"], fmt_int(f["points"]))
+        plot.append("'%s' using 1:2 with linespoints title '%s, degree %d'" % (path, label, f["degree"]))
     if plot:
         png = os.path.join(IMG, "error-vs-control-points.png")
-        script = ("set terminal pngcairo size 800,560; set output '%s'; set logscale xy; set grid;"
+        script = ("set terminal pngcairo size 1100,600 noenhanced; set output '%s'; set logscale xy; set grid;"
                   "set xlabel 'control points'; set ylabel 'max error (of the largest bounding-box side)';"
-                  "set key bottom left; set title 'tbs fit: max error after each refinement round';"
+                  "set key outside right; set title 'tbs fit: max error after each refinement round';"
                   "plot %s, 1e-3 with lines dashtype 2 lc rgb 'black' title 'tolerance'" % (png, ", ".join(plot)))
         subprocess.run(["gnuplot", "-e", script], check=True)
         made.append(png)
@@ -296,10 +301,8 @@ def write_doc(mode, fits, cases, pngs, maps, argv):
         lines += side_by_side(cases)
         lines += ["", "Distances: from every input point to a tessellation of each surface "
                   "(`tbs_peers distance`, the same code for all), over the largest bounding-box side. "
-                  "The tessellations' own chordal deviation is at most %.1e of that size here, so it "
-                  "moves no figure by more than that." % max(
-                      [r["distance"]["chordal_deviation"] for c in cases for r in c["rows"].values()
-                       if "distance" in r and "chordal_deviation" in r["distance"]] or [0]),
+                  "The last column is the tessellation's own largest chordal deviation (same scale), "
+                  "measured over the whole surface: a distance can be off by at most that much.",
                   "Times: the fitting call alone (tbs: the report's `seconds`; FreeCAD: the "
                   "`approxSurface` call; plate: `Perform` + `MakeApprox`). Ratios above 1 favour tbs.", ""]
         for png in maps:
@@ -324,7 +327,17 @@ def main():
     ap.add_argument("--work", default=os.path.join(ROOT, "out", "bench-run"))
     ap.add_argument("--freecad-timeout", type=int, default=1200, help="seconds per approxSurface call")
     ap.add_argument("--peer-points", type=int, default=10000, help="points of the synthetic scans for the peers")
+    ap.add_argument("--from-json", action="store_true",
+                    help="only rewrite docs/benchmarks.md and the plots from the last run's results in --work")
     args = ap.parse_args()
+    if args.from_json:
+        fits = json.load(open(os.path.join(args.work, "fits.json")))
+        sbs = os.path.join(args.work, "side-by-side.json")
+        cases = json.load(open(sbs)) if os.path.exists(sbs) else []
+        pngs, maps = plots(fits, args.work), distance_maps(cases)
+        write_doc(args.mode, fits, cases, pngs, maps, json.load(open(os.path.join(args.work, "argv.json"))))
+        log("rewrote", DOC, *(pngs + maps))
+        return
     for tool in (TBS, PEERS, "/usr/bin/time"):
         if not os.access(tool, os.X_OK):
             sys.exit("run.py: %s is missing (build with scripts/test.sh; apt-get install time)" % tool)
@@ -366,6 +379,7 @@ def main():
             cases.append({"name": name, "rows": peers(scan, base, args.work, tag, args.freecad_timeout)})
         json.dump(cases, open(os.path.join(args.work, "side-by-side.json"), "w"), indent=1)
     json.dump(fits, open(os.path.join(args.work, "fits.json"), "w"), indent=1)
+    json.dump(sys.argv[1:], open(os.path.join(args.work, "argv.json"), "w"))
 
     pngs = []
     if not args.no_docs and shutil.which("gnuplot"):
