@@ -10,7 +10,7 @@ TBS_PACKAGES=(
   libtinygltf-dev libstb-dev libopenexr-dev
 )
 TBS_TEST_PACKAGES=(libgtest-dev libgmock-dev libbenchmark-dev python3 python3-jsonschema libcgal-demo
-  freecad-python3 clang libclang-rt-14-dev)
+  freecad-python3 clang libclang-rt-14-dev pybind11-dev python3-dev python3-numpy)
 
 tbs_install_deps() {
   local wanted=("${TBS_PACKAGES[@]}" "$@") missing=() p

@@ -225,6 +225,7 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
   FitReport& rep = res.report;
   std::map<std::string, double> stage;
   auto progress = [&](const std::string& st, const std::string& msg, double f) {
+    if (opt.stop.stop_requested()) throw Cancelled(name + ": the fit was cancelled (" + st + ")");
     if (opt.progress) opt.progress({st, msg, f});
   };
   const int n = opt.degree;
@@ -389,6 +390,9 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
 
     // Errors per point.
     auto measure = [&] {
+      progress("error", "round " + std::to_string(iter + 1) + ": measuring the error at " + std::to_string(N) +
+                            " points",
+               0);
       const auto ts = Clock::now();
       std::vector<uint8_t> inside(N);
       eval.evaluate_batch(uv, positions, {}, {}, inside, opt.threads);

@@ -12,6 +12,8 @@
 #include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -19,6 +21,10 @@
 #include <limits>
 #include <numbers>
 #include <random>
+#include <stop_token>
+#include <string>
+#include <thread>
+#include <vector>
 
 namespace tbs {
 namespace {
@@ -309,6 +315,62 @@ TEST(Fit, MemoryLimitRefusesUpFrontAndStopsRefinement) {
   o.max_memory = 0;
   o.max_iterations = r.report.iterations;
   EXPECT_GT(fit(s, o).report.control_points, r.report.control_points);
+}
+
+TEST(Fit, ACancelledFitStopsAtItsNextStepAndThrowsCancelled) {
+  auto f = [](double u, double v) { return Point3(u, v, 0.05 * std::sin(20 * u) * std::sin(16 * v)); };
+  Scan s = random_scan(f, 2000, 12);
+  s.source = "wavy.ply";
+  FitOptions o;
+  o.triangles = 32;
+  o.tolerance = 1e-5;  // many rounds: the fit would go on without the stop
+  o.knot_sweeps = 0;
+
+  // Requested before the fit: nothing is done, not even the first progress report.
+  {
+    std::stop_source source;
+    source.request_stop();
+    o.stop = source.get_token();
+    int reports = 0;
+    o.progress = [&](const FitProgress&) { ++reports; };
+    EXPECT_THROW(fit(s, o), Cancelled);
+    EXPECT_EQ(reports, 0);
+  }
+  // Requested from another thread (as a GUI's stop button would) once the first refinement
+  // round is reported: the fit throws at its next step, with a message naming the scan.
+  {
+    std::stop_source source;
+    o.stop = source.get_token();
+    std::atomic<bool> refined{false};
+    std::vector<std::string> stages;
+    o.progress = [&](const FitProgress& p) {
+      stages.push_back(p.stage);
+      if (p.stage == "refine") {
+        refined = true;
+        // Wait for the other thread, so that the stop lands at the next step.
+        while (!source.stop_requested()) std::this_thread::yield();
+      }
+    };
+    std::thread gui([&] {
+      while (!refined) std::this_thread::yield();
+      source.request_stop();
+    });
+    try {
+      fit(s, o);
+      FAIL() << "expected Cancelled";
+    } catch (const Cancelled& e) {
+      EXPECT_NE(std::string(e.what()).find("wavy.ply: the fit was cancelled"), std::string::npos) << e.what();
+    }
+    gui.join();
+    ASSERT_FALSE(stages.empty());
+    EXPECT_EQ(stages.back(), "refine");  // no step after the stop
+    EXPECT_EQ(std::count(stages.begin(), stages.end(), "refine"), 1);
+  }
+  // The same fit without a stop runs more than one round.
+  o.stop = {};
+  o.progress = {};
+  o.max_iterations = 3;
+  EXPECT_GT(fit(s, o).report.iterations, 1);
 }
 
 // A sheet folded by 60 degrees along u = 0.5.

@@ -32,6 +32,12 @@ class SolverError : public Error {
   using Error::Error;
 };
 
+/// The caller asked the work to stop (FitOptions::stop): not a failure, nothing is returned.
+class Cancelled : public Error {
+ public:
+  using Error::Error;
+};
+
 /// A parameter point lies outside the spline's domain.
 class OutsideDomain : public InvalidInput {
  public:

@@ -7,6 +7,7 @@
 #include <tbs/spline.h>
 
 #include <functional>
+#include <stop_token>
 #include <string>
 #include <vector>
 
@@ -14,7 +15,7 @@ namespace tbs {
 
 /// Progress of a long stage, reported to FitOptions::progress.
 struct FitProgress {
-  std::string stage;    ///< "domain", "solve", "knots", "refine", "error"
+  std::string stage;    ///< "normals", "domain", "solve", "knots", "error", "refine"
   std::string message;  ///< one line for a person, e.g. "iteration 3: 1,204 triangles"
   double fraction = 0;  ///< of the stage, in [0, 1]
 };
@@ -64,6 +65,13 @@ struct FitOptions {
   int threads = 0;
   /// Called from the calling thread between steps. May be empty.
   std::function<void(const FitProgress&)> progress;
+  /// Cooperative cancellation: when a stop is requested on the std::stop_source this token
+  /// comes from (from any thread), fit() throws Cancelled at its next step: before every
+  /// progress report, so between the stages (normals, domain, each solve, each knot sweep,
+  /// each error measurement, each refinement round). A stage is not interrupted inside: the
+  /// wait is at most one stage, which on 1M points can be 40 s (docs/benchmarks.md).
+  /// Default: a token that never stops.
+  std::stop_token stop;
 };
 
 /// The fit report: the paper's Table 1 columns and more. Errors are distances |p - F(u)|.
@@ -140,7 +148,7 @@ void check_fit_memory(const std::string& name, size_t points, const FitOptions& 
 /// Fits one DMS spline to a scan that has parameters.
 /// \throw InvalidInput if the scan has no parameters, too few points, degenerate or folded
 ///        parameters, options out of range, or needs more memory than options.max_memory;
-///        SolverError if the sparse solve fails.
+///        SolverError if the sparse solve fails; Cancelled if options.stop was requested.
 FitResult fit(const Scan& scan, const FitOptions& options);
 
 }  // namespace tbs

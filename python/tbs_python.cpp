@@ -1,0 +1,371 @@
+// The Python module `tbs` (pybind11): fit, evaluate, tessellate and export with NumPy arrays.
+// docs/python.md documents it; tests/python/ tests it in Debian's python3 and inside FreeCAD.
+#include <tbs/cad_export.h>
+#include <tbs/cad_patches.h>
+#include <tbs/errors.h>
+#include <tbs/evaluator.h>
+#include <tbs/extract.h>
+#include <tbs/fit.h>
+#include <tbs/io.h>
+#include <tbs/mesh_export.h>
+#include <tbs/scan.h>
+#include <tbs/tessellate.h>
+
+#include <pybind11/functional.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <memory>
+#include <stop_token>
+#include <string>
+#include <vector>
+
+namespace py = pybind11;
+
+namespace {
+
+using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
+
+// An (N, k) array of doubles, checked.
+Array checked(const Array& a, py::ssize_t columns, const char* what) {
+  if (a.ndim() != 2 || a.shape(1) != columns) {
+    std::string shape;
+    for (py::ssize_t k = 0; k < a.ndim(); ++k) shape += (k ? ", " : "") + std::to_string(a.shape(k));
+    throw tbs::InvalidInput(std::string(what) + " must be an array of shape (N, " + std::to_string(columns) +
+                            "), got shape (" + shape + ")");
+  }
+  return a;
+}
+
+template <class V>
+Array to_array(const std::vector<V>& v, py::ssize_t columns) {
+  Array a({static_cast<py::ssize_t>(v.size()), columns});
+  auto m = a.mutable_unchecked<2>();
+  for (size_t i = 0; i < v.size(); ++i)
+    for (py::ssize_t k = 0; k < columns; ++k) m(static_cast<py::ssize_t>(i), k) = v[i][k];
+  return a;
+}
+
+py::array_t<int> faces_array(const std::vector<std::array<int, 3>>& faces) {
+  py::array_t<int> a({static_cast<py::ssize_t>(faces.size()), py::ssize_t{3}});
+  auto m = a.mutable_unchecked<2>();
+  for (size_t i = 0; i < faces.size(); ++i)
+    for (int k = 0; k < 3; ++k) m(static_cast<py::ssize_t>(i), k) = faces[i][k];
+  return a;
+}
+
+py::object json_loads(const std::string& text) { return py::module_::import("json").attr("loads")(text); }
+
+// A fitted or loaded spline with its evaluator (built on first use).
+class PySpline {
+ public:
+  PySpline(tbs::Spline spline, std::string report_json, std::string units)
+      : spline_(std::make_unique<tbs::Spline>(std::move(spline))), report_(std::move(report_json)),
+        units_(std::move(units)) {}
+
+  int degree() const { return spline_->degree(); }
+  int triangle_count() const { return spline_->domain().triangle_count(); }
+  Array control_points() const { return to_array(spline_->control_points(), 3); }
+  py::object report() const { return report_.empty() ? py::none() : json_loads(report_); }
+  const std::string& units() const { return units_; }
+
+  // F(u) at every row of uv; with derivatives also F_u and F_v. Points outside the domain
+  // raise OutsideDomain (naming the row) unless outside="nan".
+  py::object evaluate(const Array& uv_in, bool derivatives, const std::string& outside) const {
+    const Array uv = checked(uv_in, 2, "uv");
+    if (outside != "raise" && outside != "nan")
+      throw tbs::InvalidInput("outside must be 'raise' or 'nan', got '" + outside + "'");
+    const size_t n = static_cast<size_t>(uv.shape(0));
+    std::vector<tbs::Point2> u(n);
+    auto r = uv.unchecked<2>();
+    for (size_t i = 0; i < n; ++i) u[i] = tbs::Point2(r(i, 0), r(i, 1));
+    std::vector<tbs::Point3> p(n);
+    std::vector<tbs::Vector3> du(derivatives ? n : 0), dv(derivatives ? n : 0);
+    std::vector<uint8_t> inside(n);
+    {
+      py::gil_scoped_release release;
+      evaluator().evaluate_batch(u, p, du, dv, inside);
+    }
+    if (outside == "raise")
+      for (size_t i = 0; i < n; ++i)
+        if (!inside[i])
+          throw tbs::OutsideDomain("uv[" + std::to_string(i) + "] = (" + std::to_string(u[i].x()) + ", " +
+                                   std::to_string(u[i].y()) +
+                                   ") is outside the spline's domain; pass outside='nan' to get NaN there");
+    if (!derivatives) return to_array(p, 3);
+    return py::make_tuple(to_array(p, 3), to_array(du, 3), to_array(dv, 3));
+  }
+
+  py::dict tessellate(double chordal_tolerance, int resolution) const {
+    tbs::TessellateOptions o;
+    if (resolution > 0) {
+      o.resolution = resolution;
+    } else {
+      o.chordal_tolerance = chordal_tolerance;
+    }
+    tbs::Mesh m;
+    {
+      py::gil_scoped_release release;
+      m = tbs::tessellate(*spline_, o);
+    }
+    py::dict d;
+    d["positions"] = to_array(m.positions, 3);
+    d["normals"] = to_array(m.normals, 3);
+    d["uv"] = to_array(m.parameters, 2);
+    d["faces"] = faces_array(m.faces);
+    d["max_chordal_deviation"] = m.max_chordal_deviation;
+    return d;
+  }
+
+  void save(const std::string& path) const {
+    tbs::SplineFile f{*spline_, units_ == "" ? "unitless" : units_, report_.empty() ? "{}" : report_};
+    tbs::write_tbs(path, f);
+  }
+
+  // STEP/IGES (compact patches or exact pieces) or a mesh (glb, gltf, obj, ply), by extension.
+  py::dict export_file(const std::string& path, double cad_tolerance, double angle_tolerance, int patch_degree,
+                       long max_patches, bool exact, const std::string& units, double chordal_tolerance) const {
+    const std::string ext = lower_extension(path);
+    py::dict d;
+    py::gil_scoped_release release;
+    if (ext == ".step" || ext == ".stp" || ext == ".iges" || ext == ".igs") {
+      tbs::TrianglePatchSet patches;
+      double deviation = 0, normal_deviation = 0;
+      bool within = true;
+      if (exact) {
+        patches = tbs::patch_set(tbs::extract_bezier(*spline_));
+      } else {
+        tbs::CadPatchOptions co;
+        co.tolerance = cad_tolerance;
+        co.angle_tolerance = angle_tolerance;
+        co.degree = patch_degree;
+        co.max_patches = max_patches;
+        const tbs::CadPatches c = tbs::make_cad_patches(*spline_, co);
+        patches = tbs::patch_set(c);
+        deviation = c.max_position_deviation;
+        normal_deviation = c.max_normal_deviation;
+        within = c.within_tolerance;
+      }
+      tbs::CadExportOptions eo;
+      eo.units = units.empty() ? (units_ == "unitless" || units_.empty() ? "mm" : units_) : units;
+      eo.product_name = std::filesystem::path(path).stem().string();
+      const auto r = ext == ".step" || ext == ".stp" ? tbs::write_step(path, patches, eo)
+                                                      : tbs::write_iges(path, patches, eo);
+      py::gil_scoped_acquire acquire;
+      d["patches"] = patches.size();
+      d["faces"] = r.faces;
+      d["shells"] = r.shells;
+      d["free_edges"] = r.free_edges;
+      d["max_deviation"] = deviation;
+      d["max_normal_deviation"] = normal_deviation;
+      d["within_tolerance"] = within;
+      return d;
+    }
+    if (ext == ".glb" || ext == ".gltf" || ext == ".obj" || ext == ".ply") {
+      tbs::TessellateOptions o;
+      o.chordal_tolerance = chordal_tolerance;
+      const tbs::Mesh m = tbs::tessellate(*spline_, o);
+      const auto r = ext == ".glb" || ext == ".gltf"
+                         ? tbs::write_gltf(path, m, spline_->domain().bounding_box())
+                         : tbs::write_mesh_soup(path, m);
+      py::gil_scoped_acquire acquire;
+      d["vertices"] = r.vertices;
+      d["faces"] = r.faces;
+      return d;
+    }
+    throw tbs::InvalidInput(path + ": unknown output format '" + ext +
+                            "' (step, stp, iges, igs, glb, gltf, obj, ply)");
+  }
+
+ private:
+  const tbs::Evaluator& evaluator() const {
+    if (!evaluator_) evaluator_ = std::make_unique<tbs::Evaluator>(*spline_);
+    return *evaluator_;
+  }
+  std::unique_ptr<tbs::Spline> spline_;  // on the heap: the evaluator keeps a reference to it
+  std::string report_;
+  std::string units_;
+  mutable std::unique_ptr<tbs::Evaluator> evaluator_;
+};
+
+using Faces = py::array_t<long long, py::array::c_style | py::array::forcecast>;
+
+tbs::Scan scan_from(const Array& points, const std::optional<Array>& uv, const std::optional<Array>& normals,
+                    const std::optional<Faces>& faces) {
+  tbs::Scan s;
+  const Array p = checked(points, 3, "points");
+  auto pr = p.unchecked<2>();
+  for (py::ssize_t i = 0; i < p.shape(0); ++i) s.positions.emplace_back(pr(i, 0), pr(i, 1), pr(i, 2));
+  if (uv) {
+    const Array a = checked(*uv, 2, "uv");
+    if (a.shape(0) != p.shape(0)) throw tbs::InvalidInput("uv must have one row per point");
+    auto r = a.unchecked<2>();
+    for (py::ssize_t i = 0; i < a.shape(0); ++i) s.uv.emplace_back(r(i, 0), r(i, 1));
+  }
+  if (normals) {
+    const Array a = checked(*normals, 3, "normals");
+    if (a.shape(0) != p.shape(0)) throw tbs::InvalidInput("normals must have one row per point");
+    auto r = a.unchecked<2>();
+    for (py::ssize_t i = 0; i < a.shape(0); ++i) s.normals.emplace_back(r(i, 0), r(i, 1), r(i, 2));
+  }
+  if (faces) {
+    if (faces->ndim() != 2 || faces->shape(1) != 3)
+      throw tbs::InvalidInput("faces must be an integer array of shape (F, 3)");
+    auto r = faces->unchecked<2>();
+    for (py::ssize_t i = 0; i < faces->shape(0); ++i) {
+      std::array<int, 3> t{};
+      for (int k = 0; k < 3; ++k) {
+        if (r(i, k) < 0 || r(i, k) >= p.shape(0))
+          throw tbs::InvalidInput("faces[" + std::to_string(i) + "][" + std::to_string(k) + "] = " +
+                                  std::to_string(r(i, k)) + " is not a point index (0 to " +
+                                  std::to_string(p.shape(0) - 1) + ")");
+        t[k] = static_cast<int>(r(i, k));
+      }
+      s.triangles.push_back(t);
+    }
+  }
+  s.source = "points";
+  return s;
+}
+
+PySpline fit(const Array& points, const std::optional<Array>& uv, const std::optional<Array>& normals,
+             const std::optional<Faces>& faces, int degree,
+             double tolerance, double tolerance_abs, double fairness, double bending, double feature_angle,
+             bool features, int triangles, int knot_sweeps, int max_iterations, int threads,
+             const std::optional<py::function>& progress) {
+  if (!uv)
+    throw tbs::InvalidInput(
+        "uv is required: the module fits points with parameters; flatten a raw scan with "
+        "`tbs fit` first");
+  const tbs::Scan scan = scan_from(points, uv, normals, faces);
+  tbs::FitOptions o;
+  o.degree = degree;
+  o.tolerance = tolerance;
+  o.tolerance_abs = tolerance_abs;
+  o.fairness = fairness;
+  o.bending = bending;
+  o.feature_angle = feature_angle;
+  o.features = features;
+  o.triangles = triangles;
+  o.knot_sweeps = knot_sweeps;
+  o.max_iterations = max_iterations;
+  o.threads = threads;
+  std::stop_source stop;
+  o.stop = stop.get_token();
+  // The callback runs on this thread with the GIL taken back. It returns False to cancel
+  // (the fit then raises Cancelled); Ctrl-C cancels too.
+  o.progress = [&](const tbs::FitProgress& p) {
+    py::gil_scoped_acquire acquire;
+    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+    if (progress) {
+      const py::object keep = (*progress)(p.stage, p.message, p.fraction);
+      if (!keep.is_none() && !keep.cast<bool>()) stop.request_stop();
+    }
+  };
+  tbs::FitResult r;
+  {
+    py::gil_scoped_release release;
+    r = tbs::fit(scan, o);
+  }
+  return PySpline(std::move(r.spline), r.report.to_json(true), "unitless");
+}
+
+PySpline load(const std::string& path) {
+  tbs::SplineFile f = tbs::read_tbs(path);
+  return PySpline(std::move(f.spline), f.metadata_json, f.units);
+}
+
+py::dict read_scan(const std::string& path, size_t max_points) {
+  tbs::ScanReadOptions o;
+  o.max_points = max_points;
+  tbs::Scan s;
+  {
+    py::gil_scoped_release release;
+    s = tbs::read_scan(path, o);
+  }
+  py::dict d;
+  d["points"] = to_array(s.positions, 3);
+  d["uv"] = s.has_uv() ? py::object(to_array(s.uv, 2)) : py::none();
+  d["normals"] = s.has_normals() ? py::object(to_array(s.normals, 3)) : py::none();
+  d["faces"] = s.has_faces() ? py::object(faces_array(s.triangles)) : py::none();
+  return d;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(tbs, m) {
+  m.doc() = "Triangular B-spline (DMS spline) surfaces from scans, for CAD: fit, evaluate, tessellate, export.";
+  m.attr("__version__") = TBS_VERSION;
+
+  // Exceptions: pybind11 tries translators newest first, so the base class comes first.
+  static py::exception<tbs::Error> error(m, "Error", PyExc_RuntimeError);
+  static py::exception<tbs::InvalidInput> invalid(m, "InvalidInput", PyExc_ValueError);
+  static py::exception<tbs::OutsideDomain> outside(m, "OutsideDomain", invalid.ptr());
+  static py::exception<tbs::IoError> io(m, "IoError", PyExc_OSError);
+  static py::exception<tbs::SolverError> solver(m, "SolverError", error.ptr());
+  static py::exception<tbs::Cancelled> cancelled(m, "Cancelled", error.ptr());
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const tbs::Cancelled& e) {
+      cancelled(e.what());
+    } catch (const tbs::SolverError& e) {
+      solver(e.what());
+    } catch (const tbs::IoError& e) {
+      io(e.what());
+    } catch (const tbs::OutsideDomain& e) {
+      outside(e.what());
+    } catch (const tbs::InvalidInput& e) {
+      invalid(e.what());
+    } catch (const tbs::Error& e) {
+      error(e.what());
+    }
+  });
+
+  py::class_<PySpline>(m, "Spline", "A triangular B-spline surface (fitted, or loaded from a .tbs file).")
+      .def_property_readonly("degree", &PySpline::degree)
+      .def_property_readonly("triangle_count", &PySpline::triangle_count, "Domain triangles.")
+      .def_property_readonly("control_points", &PySpline::control_points, "(K, 3) array.")
+      .def_property_readonly("report", &PySpline::report, "The fit report (dict), or the .tbs metadata.")
+      .def_property_readonly("units", &PySpline::units)
+      .def("evaluate", &PySpline::evaluate, py::arg("uv"), py::arg("derivatives") = false,
+           py::arg("outside") = "raise",
+           "F(u) for an (N, 2) array of parameters: an (N, 3) array, or (F, F_u, F_v) with "
+           "derivatives=True. Parameters outside the domain raise OutsideDomain, or give NaN with "
+           "outside='nan'.")
+      .def("tessellate", &PySpline::tessellate, py::arg("chordal_tolerance") = 1e-4, py::arg("resolution") = 0,
+           "A watertight triangle mesh: dict of positions (V, 3), normals (V, 3), uv (V, 2), faces "
+           "(F, 3) and max_chordal_deviation. Adaptive to chordal_tolerance (of the model size), "
+           "or uniform with resolution > 0.")
+      .def("save", &PySpline::save, py::arg("path"), "Writes a .tbs file (atomically).")
+      .def("export", &PySpline::export_file, py::arg("path"), py::arg("cad_tolerance") = 1e-6,
+           py::arg("angle_tolerance") = 1.0, py::arg("patch_degree") = 0, py::arg("max_patches") = 50000,
+           py::arg("exact") = false, py::arg("units") = "", py::arg("chordal_tolerance") = 1e-4,
+           "Writes STEP/IGES (.step .stp .iges .igs: compact patches, or the exact pieces with "
+           "exact=True) or a mesh (.glb .gltf .obj .ply), as `tbs convert` does. Returns a dict "
+           "of what was written.");
+
+  m.def("fit", &fit, py::arg("points"), py::arg("uv"), py::arg("normals") = py::none(),
+        py::arg("faces") = py::none(), py::arg("degree") = 3,
+        py::arg("tolerance") = 1e-3, py::arg("tolerance_abs") = 0.0, py::arg("fairness") = 1e-3,
+        py::arg("bending") = 1e-4, py::arg("feature_angle") = 40.0, py::arg("features") = true,
+        py::arg("triangles") = 0, py::arg("knot_sweeps") = 1, py::arg("max_iterations") = 25,
+        py::arg("threads") = 0, py::arg("progress") = py::none(),
+        "Fits one spline to points (N, 3) with parameters uv (N, 2), as `tbs fit` does (the "
+        "options and defaults are the same). faces (F, 3), the scan's triangles when it is a "
+        "mesh, let the fit find sharp edges from the dihedral angles, as the command does. progress(stage, message, fraction) is called "
+        "between steps; returning False cancels the fit (raises Cancelled), as does Ctrl-C.");
+  m.def("load", &load, py::arg("path"), "Reads a .tbs file.");
+  m.def("read_scan", &read_scan, py::arg("path"), py::arg("max_points") = 50'000'000,
+        "Reads a scan (PLY, OBJ, OFF, STL, XYZ): dict of points (N, 3) and uv, normals, faces "
+        "(arrays, or None when the file has none).");
+}

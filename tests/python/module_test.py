@@ -1,0 +1,128 @@
+#!/usr/bin/python3
+"""Python.Module: the `tbs` module in Debian's python3 with NumPy (PYTHONPATH: the build's
+python/ folder).
+
+  /usr/bin/python3 tests/python/module_test.py SOURCE_DIR WORK_DIR TBS_COMMAND
+"""
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+import tbs
+
+SOURCE, WORK, TBS = sys.argv[1], sys.argv[2], sys.argv[3]
+os.makedirs(WORK, exist_ok=True)
+failures = []
+
+
+def check(condition, what):
+    print(("ok    " if condition else "FAIL  ") + what)
+    if not condition:
+        failures.append(what)
+
+
+def expect_raises(kind, what, fn):
+    try:
+        fn()
+    except kind as e:
+        check(True, "%s raises %s: %s" % (what, kind.__name__, str(e)[:100]))
+        return e
+    except Exception as e:  # noqa: BLE001
+        check(False, "%s raises %s, not %s: %s" % (what, kind.__name__, type(e).__name__, e))
+        return None
+    check(False, "%s raises %s (nothing raised)" % (what, kind.__name__))
+    return None
+
+
+def surface(u, v):
+    return np.stack([100 * u, 80 * v, 12 * np.sin(3 * u) * np.cos(2 * v)], axis=-1)
+
+
+# Points with parameters on a known surface (100 x 80 mm).
+rng = np.random.default_rng(3)
+uv = rng.random((4000, 2))
+points = surface(uv[:, 0], uv[:, 1])
+
+check(tbs.__version__.count(".") == 2, "version %s is major.minor.patch" % tbs.__version__)
+
+stages = []
+spline = tbs.fit(points, uv, tolerance=1e-4, progress=lambda stage, message, fraction: stages.append(stage))
+report = spline.report
+check(report["converged"] and report["max_error"] <= 1e-4, "fit converges to 1e-4: max error %.2e" % report["max_error"])
+check(report["points"] == 4000 and spline.degree == 3, "report: 4000 points, degree 3")
+check("solve" in stages and "refine" in stages, "progress reports the stages: %s" % sorted(set(stages)))
+check(spline.control_points.shape == (report["control_points"], 3), "control points (K, 3)")
+
+# Evaluation against the known surface (error within the tolerance of 100 mm, doubled for
+# points between the fitted ones).
+grid = np.array([(u, v) for u in np.linspace(0.05, 0.95, 7) for v in np.linspace(0.05, 0.95, 7)])
+value = spline.evaluate(grid)
+miss = np.linalg.norm(value - surface(grid[:, 0], grid[:, 1]), axis=1).max()
+check(value.shape == (49, 3) and miss < 2e-2, "evaluate (49, 3) within 0.02 mm of the surface: %.2e" % miss)
+f, fu, fv = spline.evaluate(grid, derivatives=True)
+h = 1e-6
+fd = (spline.evaluate(grid + [h, 0]) - spline.evaluate(grid - [h, 0])) / (2 * h)
+check(np.allclose(f, value) and np.abs(fu - fd).max() < 1e-4 * np.abs(fd).max(),
+      "derivatives: F_u matches central differences")
+outside = np.array([[0.5, 0.5], [3.0, 3.0]])
+expect_raises(tbs.OutsideDomain, "evaluate outside the domain", lambda: spline.evaluate(outside))
+nan = spline.evaluate(outside, outside="nan")
+check(np.isnan(nan[1]).all() and np.isfinite(nan[0]).all(), "outside='nan' gives NaN only outside")
+check(issubclass(tbs.OutsideDomain, ValueError) and issubclass(tbs.IoError, OSError),
+      "exceptions: OutsideDomain is a ValueError, IoError an OSError")
+
+mesh = spline.tessellate(chordal_tolerance=1e-4)
+check(mesh["positions"].shape[1] == 3 and mesh["faces"].shape[1] == 3 and mesh["faces"].max() < len(mesh["positions"]),
+      "tessellate: %d vertices, %d faces, indices in range" % (len(mesh["positions"]), len(mesh["faces"])))
+check(np.allclose(np.linalg.norm(mesh["normals"], axis=1), 1), "tessellate: unit normals")
+onsurf = np.linalg.norm(spline.evaluate(mesh["uv"]) - mesh["positions"], axis=1).max()
+check(onsurf < 1e-9, "tessellate: vertices lie on the spline")
+
+path = os.path.join(WORK, "fit.tbs")
+spline.save(path)
+again = tbs.load(path)
+check(np.array_equal(again.evaluate(grid), value), "save + load evaluates identically")
+
+step = os.path.join(WORK, "fit.step")
+r = spline.export(step, cad_tolerance=1e-4)
+check(open(step, "rb").read(13) == b"ISO-10303-21;" and r["shells"] == 1, "export STEP: %s" % r)
+glb = os.path.join(WORK, "fit.glb")
+r = spline.export(glb)
+check(open(glb, "rb").read(4) == b"glTF" and r["faces"] > 0, "export glb: %s" % r)
+expect_raises(tbs.InvalidInput, "export to .dxf", lambda: spline.export(os.path.join(WORK, "x.dxf")))
+check(not os.path.exists(os.path.join(WORK, "x.dxf")), "nothing written for .dxf")
+
+# Cancellation: progress returning False stops the fit at its next step.
+calls = []
+expect_raises(tbs.Cancelled, "progress returning False",
+              lambda: tbs.fit(points, uv, tolerance=1e-6, progress=lambda s, m, f: calls.append(s) or False))
+check(len(calls) == 1, "cancelled after the first progress report (%d reports)" % len(calls))
+
+# Bad input: clear errors.
+expect_raises(tbs.InvalidInput, "points of shape (N, 2)", lambda: tbs.fit(points[:, :2], uv))
+expect_raises(tbs.InvalidInput, "uv of another length", lambda: tbs.fit(points, uv[:10]))
+expect_raises(tbs.InvalidInput, "fit without uv", lambda: tbs.fit(points, None))
+expect_raises(tbs.IoError, "read_scan of a missing file", lambda: tbs.read_scan(os.path.join(WORK, "none.ply")))
+
+scan = tbs.read_scan(os.path.join(SOURCE, "samples", "bracket.ply"))
+check(scan["points"].shape == (40933, 3) and scan["uv"].shape == (40933, 2) and scan["faces"] is not None,
+      "read_scan(samples/bracket.ply): 40933 points with uv and faces")
+
+# The module fits a mesh as the command does: same domain, control points and errors.
+bracket = tbs.fit(scan["points"], scan["uv"], faces=scan["faces"]).report
+rep = os.path.join(WORK, "bracket.json")
+subprocess.run([TBS, "fit", os.path.join(SOURCE, "samples", "bracket.ply"), "-o", os.path.join(WORK, "bracket.tbs"),
+                "-q", "--report", rep], check=True, stdout=subprocess.DEVNULL)
+cli = json.load(open(rep))
+same = all(bracket[k] == cli[k] for k in ("domain_triangles", "control_points", "feature_edges", "iterations"))
+check(same and abs(bracket["max_error"] - cli["max_error"]) <= 1e-12,
+      "fit(points, uv, faces) of the bracket equals `tbs fit`: %d triangles, %d control points, %d feature "
+      "edges, max error %.4e" % (bracket["domain_triangles"], bracket["control_points"], bracket["feature_edges"],
+                                 bracket["max_error"]))
+
+if failures:
+    sys.exit("module_test: %d failed: %s" % (len(failures), "; ".join(failures)))
+print("module_test: all passed")
