@@ -100,7 +100,9 @@ struct CadPatches {
 };
 
 /// Approximates `spline` by compact Bezier patches (see the file comment).
-/// \throw InvalidInput if an option is out of range or the spline has no triangles.
+/// \throw InvalidInput if the spline has no triangles or an option is out of range: degree below
+///   the spline's or above 15, no positive tolerance, angle_tolerance outside (0, 90), max_level
+///   outside 0 to 16, or max_patches below the number of domain triangles.
 CadPatches make_cad_patches(const Spline& spline, const CadPatchOptions& options = {});
 
 }  // namespace tbs

@@ -58,6 +58,7 @@ PointErrors point_errors(const Spline& spline, std::span<const Point3> points,
                          std::span<const Point2> uv, const PointErrorOptions& options = {});
 
 /// Statistics of a set of distances (NaNs skipped); signed values may be empty.
+/// Throws nothing but std::bad_alloc.
 ErrorStats error_stats(std::span<const double> distance, std::span<const double> signed_distance);
 
 struct ErrorMapOptions {
@@ -96,18 +97,19 @@ struct ErrorMap {
 
 /// Rasterises point errors and samples the surface at pixel centres.
 /// \pre errors were computed by point_errors() for the same uv.
-/// \throw InvalidInput if the sizes are out of range (1 to 16384 pixels a side) or differ.
+/// \throw InvalidInput if uv.size() differs from errors.distance.size(), or the image size is
+///   out of range (1 to 16384 pixels a side, height after deriving it from the aspect ratio).
 ErrorMap make_error_map(const Spline& spline, std::span<const Point2> uv, const PointErrors& errors,
                         const ErrorMapOptions& options = {});
 
 /// The map's `error` at parameter u: the value of the pixel containing u or, where that pixel
 /// holds no value (its centre is outside the domain, as for u on the boundary), of the nearest
 /// pixel within 3 pixels that does; NaN if there is none. u outside the map's rectangle is
-/// clamped to it.
+/// clamped to it. Throws nothing; NaN for an empty map.
 float error_at(const ErrorMap& map, const Point2& u);
 
 /// The colour scale of error previews: t = 0 blue, then cyan, green, yellow, t = 1 red (8-bit
-/// sRGB); t is clamped to [0, 1].
+/// sRGB); t is clamped to [0, 1] (NaN counts as 0). Throws nothing.
 std::array<uint8_t, 3> heat_colour(double t);
 
 }  // namespace tbs

@@ -47,7 +47,8 @@ struct ExtractOptions {
 
 /// Extracts the exact piecewise Bezier form of `spline`.
 /// \pre the spline satisfies the knot conditions (check_knot_conditions()).
-/// \throw InvalidInput if the spline has no triangles.
+/// \throw InvalidInput if the spline has no triangles; Error (the base class) if a triangle's
+///   arrangement and its triangulation disagree (an internal failure, named by triangle).
 Extraction extract_bezier(const Spline& spline, const ExtractOptions& options = {});
 
 }  // namespace tbs

@@ -41,7 +41,8 @@ struct Mesh {
 };
 
 /// Tessellates `spline`.
-/// \throw InvalidInput if an option is out of range.
+/// \throw InvalidInput if resolution (uniform mode) or max_resolution (adaptive mode) is outside
+///   1 to 4096, or a chordal tolerance is negative.
 Mesh tessellate(const Spline& spline, const TessellateOptions& options = {});
 
 }  // namespace tbs

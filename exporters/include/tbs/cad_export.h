@@ -19,11 +19,12 @@ struct Extraction;
 struct TrianglePatchSet {
   int degree = 0;
   std::vector<Point3> control_points;  ///< beta_count(degree) per patch, beta order.
+  /// Number of whole patches (control_points.size() / beta_count(degree)). Throws nothing.
   size_t size() const;
 };
-/// The compact CAD patches (the default export).
+/// The compact CAD patches (the default export). Throws nothing but std::bad_alloc.
 TrianglePatchSet patch_set(const CadPatches& patches);
-/// The exact pieces (`--exact`).
+/// The exact pieces (`--exact`). Throws nothing but std::bad_alloc.
 TrianglePatchSet patch_set(const Extraction& extraction);
 
 enum class StepSchema { AP214, AP242 };
@@ -57,9 +58,12 @@ struct CadExportReport {
   double seconds = 0;
 };
 
-/// Writes a STEP file. \throw InvalidInput for bad options or an empty patch set; Error if
-/// the sewn shape fails BRepCheck_Analyzer (nothing is written then); IoError if the file
-/// cannot be written.
+/// Writes a STEP file (atomically).
+/// \throw InvalidInput if options.units is not mm, cm, m, um, in or ft ("unitless" included),
+///   the set has no patches or a degree below 1, or a control point is not finite;
+///   Error (the base class) if OpenCASCADE cannot make a face, cannot translate the shape or
+///   throws, or the sewn shape fails BRepCheck_Analyzer (nothing is written then; these
+///   messages do not name the file); IoError if the file cannot be written.
 CadExportReport write_step(const std::string& path, const TrianglePatchSet& patches,
                            const CadExportOptions& options = {});
 

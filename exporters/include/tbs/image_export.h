@@ -19,7 +19,8 @@ struct ExrOptions {
 /// attributes `tbs.domain` (Box2f: the parameter rectangle), `tbs.units`, `tbs.measure`
 /// ("parameter" or "closest"), `tbs.tolerance`, `tbs.max`, `tbs.rms`, `tbs.p95`,
 /// `tbs.points`. The file is written atomically.
-/// \throw InvalidInput for an empty map; IoError if the file cannot be written.
+/// \throw InvalidInput for an empty map or one whose mask size is not width x height; IoError
+///   if the file cannot be written (any OpenEXR failure is reported as IoError).
 void write_error_exr(const std::string& path, const ErrorMap& map, ErrorMeasure measure,
                      const ExrOptions& options = {});
 
@@ -27,7 +28,8 @@ void write_error_exr(const std::string& path, const ErrorMap& map, ErrorMeasure 
 /// on a colour scale from blue (0) through green and yellow to red (`scale_max`, or the map's
 /// largest error if 0), pixels outside the domain transparent, interpolated pixels lighter,
 /// and a 12-pixel colour bar from 0 to scale_max along the bottom. The file is written
-/// atomically. \throw InvalidInput for an empty map; IoError if it cannot be written.
+/// atomically. \throw InvalidInput for an empty map or one whose mask size is not
+/// width x height; IoError if the PNG cannot be encoded or the file cannot be written.
 void write_error_png(const std::string& path, const ErrorMap& map, double scale_max = 0);
 
 }  // namespace tbs

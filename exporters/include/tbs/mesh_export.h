@@ -40,15 +40,17 @@ struct MeshExportReport {
 /// Vertices on edges between domain triangles are written once per triangle (same position
 /// bit for bit), so that every vertex has one triangle id.
 /// Files are written atomically; for `.gltf` the `.bin` is renamed into place first, then the
-/// `.gltf`. \throw InvalidInput for an empty mesh, an extension that is not .glb or .gltf, or
-/// vertex values of the wrong count; IoError if a file cannot be written.
+/// `.gltf`. \throw InvalidInput for a mesh without faces, an extension that is not .glb or
+/// .gltf, or vertex values of the wrong count; IoError if the model cannot be serialised or a
+/// file cannot be written. nlohmann::json::type_error (not a tbs exception) escapes if a
+/// string option (generator, name, color_quantity, units) is not valid UTF-8.
 MeshExportReport write_gltf(const std::string& path, const Mesh& mesh, const Box2& domain,
                             const GltfOptions& options = {});
 
 /// Writes the mesh's positions and faces as OBJ (ASCII, 17 digits) or binary PLY, chosen by the
 /// extension (.obj, .ply), through CGAL's polygon-soup writers; shared vertices stay shared.
-/// The file is written atomically. \throw InvalidInput for an empty mesh or another extension;
-/// IoError if it cannot be written.
+/// The file is written atomically. \throw InvalidInput for a mesh without faces or another
+/// extension; IoError if CGAL cannot write the mesh or the file cannot be written.
 MeshExportReport write_mesh_soup(const std::string& path, const Mesh& mesh);
 
 }  // namespace tbs

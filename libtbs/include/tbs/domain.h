@@ -39,7 +39,7 @@ class Domain {
 
   /// Edges as (min vertex, max vertex), ascending.
   const std::vector<std::array<int, 2>>& edges() const { return edges_; }
-  /// Edge index of (a, b) in either order, or -1.
+  /// Edge index of (a, b) in either order, or -1. Throws nothing.
   int find_edge(int a, int b) const;
   /// The edge opposite corner k of triangle t.
   int triangle_edge(int t, int k) const { return triangle_edges_[3 * t + k]; }
@@ -66,12 +66,13 @@ class Domain {
   const std::vector<std::array<int, 2>>& feature_edges() const { return feature_edges_; }
   bool is_feature_edge(int e) const { return is_feature_edge_[e] != 0; }
 
-  /// Bounding box of the vertices.
+  /// Bounding box of the vertices. Throws nothing.
   Box2 bounding_box() const;
 
   /// Moves vertex v (used when a primary knot moves). Checks that the triangles around v stay
   /// counter-clockwise; it does not re-check the boundary for self-intersection.
-  /// \throw InvalidInput if a triangle around v would flip or degenerate.
+  /// \throw InvalidInput if p is not finite or a triangle around v would flip or degenerate; the
+  ///   vertex then stays where it was. v is not range-checked.
   void move_vertex(int v, const Point2& p);
 
  private:

@@ -2,6 +2,10 @@
 /// \file
 /// The exception hierarchy of tbs. Messages say what was wrong, where (file, line, element)
 /// and, where possible, what to do about it. The `tbs` command maps each class to an exit code.
+///
+/// Each public function documents the tbs exceptions it throws (`\throw`) or that it throws
+/// none. Any function that allocates may also throw std::bad_alloc; "Throws nothing" means
+/// not even that.
 
 #include <stdexcept>
 #include <string>

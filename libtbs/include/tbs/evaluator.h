@@ -50,37 +50,40 @@ enum class EvalMode { Graph, Recursion };
 /// points may change freely between calls; after moving knots call update_knots().
 class Evaluator {
  public:
+  /// Builds the graph and the spatial index. Throws nothing but std::bad_alloc.
   explicit Evaluator(const Spline& spline, EvalMode mode = EvalMode::Graph);
   ~Evaluator();
   Evaluator(Evaluator&&) noexcept;
   Evaluator& operator=(Evaluator&&) noexcept;
 
   /// The domain triangle that contains u under the half-open rule, or -1 outside the domain.
-  /// Points on the outer boundary belong to the triangle they lie on.
+  /// Points on the outer boundary belong to the triangle they lie on. Throws nothing.
   int locate(const Point2& u) const;
 
   /// The perturbation used for u (METHOD.md section 7): the standard one, or for points on the
-  /// outer boundary one that points into the domain. Empty outside the domain.
+  /// outer boundary one that points into the domain. Empty outside the domain. Throws nothing.
   std::optional<Perturbation> perturbation(const Point2& u) const;
 
-  /// F(u). \throw OutsideDomain if u is not in the domain.
+  /// F(u). \throw OutsideDomain if u is not in the domain (or not finite).
   Point3 value(const Point2& u) const;
-  /// F(u), F_u(u), F_v(u). \throw OutsideDomain if u is not in the domain.
+  /// F(u), F_u(u), F_v(u). \throw OutsideDomain if u is not in the domain (or not finite).
   SurfacePoint evaluate(const Point2& u) const;
   /// F(u), F_u(u), F_v(u) of the polynomial piece on a chosen side of u: the one that holds
   /// the perturbed point side.u + eps (side.c - side.u) + eps^2 (side.d - side.u). On a knot
   /// line or a feature edge this picks the piece (and the one-sided derivatives) of that side.
   /// \return empty if the perturbed point is outside the domain.
-  /// \throw InvalidInput if side.u != u.
+  /// \throw InvalidInput if side.u != u (also when u is NaN); never OutsideDomain.
   std::optional<SurfacePoint> evaluate(const Point2& u, const Perturbation& side) const;
-  /// The directional derivative D_dir F(u). \throw OutsideDomain.
+  /// The directional derivative D_dir F(u).
+  /// \throw OutsideDomain if u is not in the domain (or not finite).
   Vector3 derivative(const Point2& u, const Vector2& dir) const;
   /// The unit normal F_u x F_v / |F_u x F_v| (zero where the surface is singular).
-  /// \throw OutsideDomain.
+  /// \throw OutsideDomain if u is not in the domain (or not finite).
   Vector3 normal(const Point2& u) const;
 
   /// Sparse basis weights of u for the value and both partial derivatives.
   /// \return false (row cleared) if u is outside the domain.
+  /// Throws nothing but std::bad_alloc.
   bool basis_row(const Point2& u, BasisRow& row) const;
 
   /// Evaluates many points in parallel (TBB). Output spans may be empty to skip them;
@@ -88,15 +91,18 @@ class Evaluator {
   /// inside[i] = 0. Results do not depend on the number of threads.
   /// \param threads maximum worker threads, 0 for all cores.
   /// \return the number of points outside the domain.
+  /// \throw InvalidInput if a non-empty output span's size differs from u.size() (checked
+  ///   before anything is written). Points outside the domain are not an error.
   size_t evaluate_batch(std::span<const Point2> u, std::span<Point3> position,
                         std::span<Vector3> du, std::span<Vector3> dv, std::span<uint8_t> inside,
                         int threads = 0) const;
 
   /// Re-reads the knots of `vertex` after Spline::set_knot(): recomputes only the graph nodes
   /// whose knot sets contain one of them, and the spatial index.
+  /// Throws nothing but std::bad_alloc; vertex is not range-checked.
   void update_knots(int vertex);
 
-  /// Number of distinct simplex splines in the graph.
+  /// Number of distinct simplex splines in the graph. Throws nothing.
   size_t node_count() const;
 
  private:

@@ -118,6 +118,8 @@ struct FitReport {
 
   /// The report as a JSON object (text), fields in a fixed order. Without times it is a
   /// function of the input and options only (stored in .tbs files, which must be reproducible).
+  /// Throws no tbs exception; nlohmann::json::type_error if stop_reason is not valid UTF-8
+  /// (it can quote FitOptions::max_memory_name).
   std::string to_json(bool with_times = true) const;
 };
 
@@ -131,24 +133,27 @@ struct FitResult {
 /// Estimated peak memory (bytes) of fit() on `points` points at degree n while its spline has
 /// `control_points` control points, the scan itself included. A model fitted to the peaks
 /// measured on synthetic scans of 100k to 1M points at degrees 2 to 5 (docs/benchmarks.md,
-/// section "Memory"), plus a quarter for safety.
+/// section "Memory"), plus a quarter for safety. Throws nothing.
 size_t estimate_fit_memory(size_t points, int degree, size_t control_points);
 
 /// The control points of the initial domain fit() builds for `points` points (the domain
-/// builder aims at FitOptions::triangles, or points / 200 within [32, 4000]).
+/// builder aims at FitOptions::triangles, or points / 200 within [32, 4000]). Throws nothing.
 size_t initial_control_points(size_t points, const FitOptions& options);
 
 /// Refuses, before any work, a fit expected to need more than options.max_memory:
 /// estimate_fit_memory(points, degree, initial_control_points()) > max_memory. fit() calls it;
 /// callers that prepare the scan first (parameterize_scan()) can call it before doing so.
 /// \throw InvalidInput `<name>: fitting N points at degree n needs about X of memory, more than
-///   the limit of Y (<max_memory_name>); ...` with what to change.
+///   the limit of Y (<max_memory_name>); ...` with what to change. Nothing if max_memory is 0.
 void check_fit_memory(const std::string& name, size_t points, const FitOptions& options);
 
 /// Fits one DMS spline to a scan that has parameters.
-/// \throw InvalidInput if the scan has no parameters, too few points, degenerate or folded
-///        parameters, options out of range, or needs more memory than options.max_memory;
+/// \throw InvalidInput if options are out of range, the scan needs more memory than
+///        options.max_memory, has no parameters, fewer than 3 points, sizes that differ, a
+///        non-finite value, a triangle index out of range, all points identical, degenerate or
+///        folded parameters, or normals that cannot be estimated;
 ///        SolverError if the sparse solve fails; Cancelled if options.stop was requested.
+///        Whatever options.progress throws passes through.
 FitResult fit(const Scan& scan, const FitOptions& options);
 
 }  // namespace tbs

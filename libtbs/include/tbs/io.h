@@ -40,10 +40,13 @@ SplineFile parse_tbs(std::string_view text, const std::string& name = "<memory>"
 SplineFile read_tbs(const std::string& path, const ReadOptions& options = {});
 
 /// The .tbs text of a spline. Numbers round-trip exactly.
-/// \throw InvalidInput if units or metadata are invalid.
+/// \throw InvalidInput if the units are unknown, metadata_json is not a JSON object, or points
+///   and point_parameters differ in size or hold a non-finite value (the message names no file).
 std::string format_tbs(const SplineFile& file);
 
-/// Writes a .tbs file atomically (see AtomicOutput). \throw IoError, InvalidInput.
+/// Writes a .tbs file atomically (see AtomicOutput).
+/// \throw InvalidInput as format_tbs(), before any file is touched; IoError if the file cannot
+///   be written.
 void write_tbs(const std::string& path, const SplineFile& file);
 
 /// An output file that appears only when complete: data goes to a temporary file in the same
@@ -51,7 +54,8 @@ void write_tbs(const std::string& path, const SplineFile& file);
 /// failed or interrupted run never leaves a partial file nor replaces a good one.
 class AtomicOutput {
  public:
-  /// \throw IoError if the temporary file cannot be created.
+  /// \throw IoError if path has no file name, is a directory, or the temporary file cannot be
+  ///   created.
   explicit AtomicOutput(std::string path);
   ~AtomicOutput();
   AtomicOutput(const AtomicOutput&) = delete;
@@ -61,7 +65,7 @@ class AtomicOutput {
   const std::string& temp_path() const { return temp_; }
   /// Writes `data` as the temporary file's whole content. \throw IoError naming the final path.
   void write(std::string_view data);
-  /// Renames the temporary file to the final path. \throw IoError.
+  /// Renames the temporary file to the final path. \throw IoError if the rename fails.
   void commit();
 
  private:
@@ -75,14 +79,15 @@ class AtomicOutput {
 /// then end the process as the signal would have (the default action is re-raised), so that
 /// an interrupted program leaves neither partial files nor temporaries. Meant for programs
 /// (the `tbs` command calls it first thing); a program with its own handlers can call
-/// remove_pending_outputs() from them instead. Idempotent.
+/// remove_pending_outputs() from them instead. Idempotent. Throws no tbs exception.
 void remove_outputs_on_signal();
 
 /// Removes the temporary files of all live AtomicOutputs (the final files are untouched).
-/// Async-signal-safe: it only reads fixed buffers and calls unlink().
+/// Async-signal-safe: it only reads fixed buffers and calls unlink(). Throws nothing.
 void remove_pending_outputs() noexcept;
 
-/// Writes `data` to `path` through an AtomicOutput. \throw IoError.
+/// Writes `data` to `path` through an AtomicOutput.
+/// \throw IoError if the temporary file cannot be created, written or renamed.
 void write_file_atomic(const std::string& path, std::string_view data);
 
 /// Reads a whole file. \throw IoError with the path and the system's reason.

@@ -26,7 +26,7 @@ struct KnotIssue {
 struct KnotCheck {
   std::vector<KnotIssue> issues;
   bool ok() const { return issues.empty(); }
-  /// The first few messages, one per line.
+  /// The first few messages, one per line. Throws nothing but std::bad_alloc.
   std::string summary(size_t max_lines = 5) const;
 };
 
@@ -39,10 +39,13 @@ struct KnotCheck {
 ///                       and b lies outside the domain's interior (its sub-knots lie strictly
 ///                       on the outer side of the edge, and no other triangle reaches into it).
 /// \pre knots.size() == domain.vertex_count() * (degree + 1).
+/// Throws nothing but std::bad_alloc: every violation, a wrong knot count included (as a
+/// "finite" issue), is reported in the result.
 KnotCheck check_knot_conditions(const Domain& domain, int degree, std::span<const Point2> knots);
 
 /// The same conditions, checked only for the given triangles and their boundary edges: what
 /// moving the knots of one vertex can break is confined to the triangles around it.
+/// Throws nothing but std::bad_alloc; the triangle indices are not range-checked.
 KnotCheck check_knot_conditions(const Domain& domain, int degree, std::span<const Point2> knots,
                                 std::span<const int> triangles);
 
@@ -54,10 +57,12 @@ KnotCheck check_knot_conditions(const Domain& domain, int degree, std::span<cons
 /// With one server per edge the kink fades toward the other end; with both, the whole edge can
 /// carry it (a 60 degree fold is then reproduced to within 2 degrees, fit_test.cpp). A vertex
 /// where lines of different directions meet serves only one of them.
+/// Throws nothing but std::bad_alloc.
 std::vector<int> feature_servers(const Domain& domain);
 
 /// Traas's radius at vertex v: half the smallest height, at v, of the triangles around it.
 /// Sub-knots strictly inside this circle keep the knot conditions (paper section 4.3).
+/// Throws nothing; v is not range-checked.
 double traas_radius(const Domain& domain, int v);
 
 /// Default knots (Traas's scheme): the sub-knots of vertex i lie inside the circle of radius
@@ -65,6 +70,7 @@ double traas_radius(const Domain& domain, int v);
 /// times r_i, in a fixed pseudo-random pattern (no three collinear in practice, so C^(n-1));
 /// boundary vertices' sub-knots lie outside the domain; feature servers' free sub-knots lie on
 /// their feature edge. Deterministic. The result passes check_knot_conditions().
+/// Throws nothing but std::bad_alloc. \pre 1 <= degree <= tol::kMaxDegree (not checked).
 std::vector<Point2> default_knots(const Domain& domain, int degree);
 
 /// A lower bound on the continuity order across every domain edge: C^k with k = n + 1 - mu,
@@ -72,6 +78,8 @@ std::vector<Point2> default_knots(const Domain& domain, int degree);
 /// |beta| = n, of the triangles at the edge (the last knots t_{i,n} excluded: F does not
 /// depend on them). n - 1 where nothing is collinear; 0 for a feature edge with enough knots
 /// on it; negative means the surface may be discontinuous there. Indexed by edge.
+/// Throws nothing but std::bad_alloc. \pre 1 <= degree <= tol::kMaxDegree and the knot count
+/// as for check_knot_conditions() (neither is checked).
 std::vector<int> edge_continuity(const Domain& domain, int degree, std::span<const Point2> knots);
 
 }  // namespace tbs

@@ -20,12 +20,12 @@ struct MeshTopology {
   int components = 0;
   int boundary_loops = 0;
   int genus = 0;  ///< summed over the components
-  /// For example "1 component, 2 boundary loops, genus 0".
+  /// For example "1 component, 2 boundary loops, genus 0". Throws nothing but std::bad_alloc.
   std::string describe() const;
 };
 
 /// The topology of a triangle mesh. \pre indices in range; the mesh is treated as given
-/// (non-manifold edges count once per distinct vertex pair).
+/// (non-manifold edges count once per distinct vertex pair). Throws nothing but std::bad_alloc.
 MeshTopology mesh_topology(size_t vertex_count, const std::vector<std::array<int, 3>>& triangles);
 
 enum class FlattenMethod {
@@ -85,7 +85,7 @@ struct ParameterizeReport {
   int subdivisions = 0;                ///< 1-to-4 subdivisions of a coarse mesh (min_points)
   size_t points_added = 0;             ///< points those made
   double seconds = 0;
-  /// The report as a JSON object (text).
+  /// The report as a JSON object (text). Throws nothing but std::bad_alloc.
   std::string to_json() const;
 };
 
@@ -102,8 +102,14 @@ struct ParameterizedScan {
 /// cloud. Normals of the input are carried to the output.
 /// \throw InvalidInput naming the scan and what was found (components, boundary loops,
 ///   genus) if the chosen component is not a disk, possibly with holes, or a closed genus-0
-///   surface (with cut_closed); if the component does not exist; if the reconstruction yields
-///   no surface; or if no method gives a bijective map.
+///   surface (with cut_closed); if the component does not exist; if the scan has fewer than 3
+///   points, a point cloud's points are identical or collinear, or the reconstruction or the
+///   repair leaves no triangle; if LSCM folds with FlattenMethod::Lscm; or if no method gives a
+///   bijective map (some of these flattening messages do not name the scan).
+/// \throw SolverError if the LSCM or mean-value system cannot be solved (FlattenMethod::Auto
+///   does not fall back then). Whatever options.progress throws passes through.
+/// \pre positions finite, triangle indices in range, normals empty or one per position (not
+///   checked).
 ParameterizedScan parameterize_scan(const Scan& scan, const ParameterizeOptions& options = {});
 
 }  // namespace tbs

@@ -25,6 +25,7 @@ int orientation_exact(const Point2& a, const Point2& b, const Point2& c);
 
 /// The exact sign (-1, 0, +1) of d(a, b, c). A floating-point filter decides almost every
 /// call; the rest go to CGAL's exact predicate.
+/// Throws nothing but std::bad_alloc (CGAL's exact fallback may allocate). \pre finite points.
 inline int orientation(const Point2& a, const Point2& b, const Point2& c) {
   const double l = (a.x() - c.x()) * (b.y() - c.y());
   const double r = (a.y() - c.y()) * (b.x() - c.x());
@@ -54,6 +55,7 @@ struct Perturbation {
 };
 
 /// Sign of d(a, b, u'), where u' is the perturbed point. Zero only if a == b.
+/// Throws as orientation().
 inline int perturbed_orientation(const Point2& a, const Point2& b, const Perturbation& p) {
   if (int s = orientation(a, b, p.u)) return s;
   if (int s = orientation(a, b, p.c)) return s;
@@ -61,7 +63,7 @@ inline int perturbed_orientation(const Point2& a, const Point2& b, const Perturb
 }
 
 /// Half-open containment: true iff the perturbed point lies in the interior of triangle abc
-/// (either orientation). A degenerate triangle contains nothing.
+/// (either orientation). A degenerate triangle contains nothing. Throws as orientation().
 inline bool half_open_contains(const Point2& a, const Point2& b, const Point2& c,
                                const Perturbation& p) {
   const int o = orientation(a, b, c);
@@ -74,7 +76,7 @@ inline bool half_open_contains(const Point2& a, const Point2& b, const Point2& c
          perturbed_orientation(b, a, p) > 0;
 }
 
-/// Closed containment for a counter-clockwise triangle abc (exact).
+/// Closed containment for a counter-clockwise triangle abc (exact). Throws as orientation().
 inline bool closed_contains_ccw(const Point2& a, const Point2& b, const Point2& c,
                                 const Point2& u) {
   return orientation(a, b, u) >= 0 && orientation(b, c, u) >= 0 && orientation(c, a, u) >= 0;

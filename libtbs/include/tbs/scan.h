@@ -58,7 +58,8 @@ struct ScanReadOptions {
 ///   empty, has an unknown extension, is malformed or truncated, has no points or more than
 ///   `options.max_points` (checked against header counts before allocating), a coordinate,
 ///   parameter or normal that is NaN, infinite or larger than 1e30 in magnitude, a zero-length
-///   normal, or a face index that is negative or out of range.
+///   normal, or a face index that is negative or out of range. A failure inside a format
+///   library, running out of memory included, is reported as InvalidInput as well.
 Scan read_scan(const std::string& path, const ScanReadOptions& options = {});
 
 /// Estimates unit normals: CGAL jet fitting (a degree-2 height function, CGAL's

@@ -11,13 +11,14 @@
 namespace tbs {
 
 /// Number of control points of a degree-n spline with shared control points:
-/// V + (n-1) E + (n-1)(n-2)/2 F.
+/// V + (n-1) E + (n-1)(n-2)/2 F. Throws nothing.
 int control_point_count(const Domain& domain, int degree);
 
 /// The canonical (triangle, beta) -> control point map: vertex points first (index = vertex),
 /// then n-1 points per edge in edge order (from the smaller vertex index to the larger), then
 /// the (n-1)(n-2)/2 interior points of each triangle in beta order. Entry
 /// [t * beta_count(n) + beta_index(beta)] is the control point of (t, beta).
+/// Throws nothing but std::bad_alloc. \pre 1 <= degree <= tol::kMaxDegree (not checked).
 std::vector<int> canonical_control_point_map(const Domain& domain, int degree);
 
 /// A DMS spline F(u) = sum_I sum_{|beta|=n} c_{I,beta} N_{I,beta}(u) over a Domain.
@@ -41,6 +42,8 @@ class Spline {
          std::vector<int> control_point_map);
 
   /// A spline with the canonical control point map and all control points at the origin.
+  /// \throw InvalidInput if the degree is out of range or the knots do not fit the domain (as
+  ///   the constructor).
   static Spline with_canonical_map(int degree, Domain domain, std::vector<Point2> knots);
 
   int degree() const { return degree_; }
@@ -50,7 +53,8 @@ class Spline {
   const Point2& knot(int vertex, int level) const { return knots_[vertex * (degree_ + 1) + level]; }
   int knot_id(int vertex, int level) const { return vertex * (degree_ + 1) + level; }
   /// Moves t_{vertex,level}. Level 0 moves the domain vertex too.
-  /// \throw InvalidInput if the position is not finite or a triangle would flip.
+  /// \throw InvalidInput if p is not finite or, for level 0, a triangle around the vertex would
+  ///   flip or degenerate (nothing is moved then). vertex and level are not range-checked.
   void set_knot(int vertex, int level, const Point2& p);
 
   int control_point_count() const { return static_cast<int>(control_points_.size()); }
@@ -67,6 +71,7 @@ class Spline {
 
   /// The blossom of the identity at (triangle, beta): (1/n) sum_j sum_{k<b_j} t_{i_j,k}.
   /// Control points c = A * blossom + b reproduce the affine map A u + b exactly.
+  /// Throws nothing.
   Point2 blossom_point(int triangle, const Beta& beta) const;
 
  private:
