@@ -137,7 +137,7 @@ int run_info(const InfoOptions& o) {
   if (check.ok()) j["surface_bbox"] = box_json(sampled_surface_box(s));
   j["metadata"] = json::parse(f.metadata_json);
 
-  std::cout << j.dump(2) << "\n";
+  std::cout << j.dump(2, ' ', false, json::error_handler_t::replace) << "\n";
   if (!check.ok()) {
     std::fprintf(stderr, "tbs: error: %s: %zu knot condition(s) fail; first: %s\n", o.file.c_str(),
                  check.issues.size(), check.issues[0].message.c_str());
@@ -291,7 +291,7 @@ void print_parameterization(const ParameterizeReport& p) {
 int fit_and_write(const FitCommandOptions& o, ParameterizedScan* pscan, const Scan* plain,
                   const std::function<bool(ParameterizedScan&)>& densify, const std::string& output,
                   const std::string& report, const std::vector<std::string>& exports, const Say& say,
-                  const std::string& points_file) {
+                  const std::string& points_file, std::size_t degenerate_faces) {
   namespace fs = std::filesystem;
   FitOptions fo = o.fit;
   fo.features = !o.no_features;
@@ -318,14 +318,14 @@ int fit_and_write(const FitCommandOptions& o, ParameterizedScan* pscan, const Sc
 
   const FitReport& rep = r.report;
   json meta;
-  meta["source"] = fs::path(o.input).filename().string();
+  meta["source"] = valid_utf8(fs::path(o.input).filename().string());
   meta["fit"] = json::parse(rep.to_json(false));
   if (param) {
     json pj = json::parse(param->to_json());
     pj.erase("seconds");  // the .tbs stays reproducible
     meta["parameterization"] = pj;
   }
-  SplineFile file{r.spline, o.units, meta.dump()};
+  SplineFile file{r.spline, o.units, meta.dump(-1, ' ', false, json::error_handler_t::replace)};
   const bool keep = o.keep_points;
   if (keep) {
     file.points = scan.positions;
@@ -335,11 +335,13 @@ int fit_and_write(const FitCommandOptions& o, ParameterizedScan* pscan, const Sc
   if (!report.empty()) {
     json full = json::parse(rep.to_json(true));
     if (param) full["parameterization"] = json::parse(param->to_json());
-    write_file_atomic(report, full.dump(2) + "\n");
+    write_file_atomic(report, full.dump(2, ' ', false, json::error_handler_t::replace) + "\n");
   }
 
   std::printf("%-18s %s\n", "input", o.input.c_str());
   std::printf("%-18s %s\n", "output", output.c_str());
+  if (degenerate_faces)
+    std::printf("%-18s %zu left out (fewer than three distinct corners)\n", "degenerate faces", degenerate_faces);
   if (param) print_parameterization(*param);
   std::printf("%-18s %zu\n", "points", rep.points);
   if (rep.points_excluded > 0)
@@ -434,10 +436,13 @@ int run_fit(const FitCommandOptions& given) {
   const Scan scan = read_scan(o.input, {.max_points = o.max_points, .limit_name = "--max-points"});
   // Refused before parameterization and fitting; fit() checks again (subdivided meshes grow).
   check_fit_memory(o.input, scan.positions.size(), o.fit);
+  if (scan.degenerate_faces && !scan.has_faces())
+    say("tbs fit: every face of " + o.input + " is degenerate (fewer than three distinct corners); its points are "
+        "fitted as a point cloud");
   if (scan.has_uv()) {
     if (o.component > 0 || o.all_components)
       say("tbs fit: the scan has parameters (u, v); --component and --all-components apply only to scans without them");
-    return fit_and_write(o, nullptr, &scan, nullptr, o.output, o.report, o.exports, say, o.input);
+    return fit_and_write(o, nullptr, &scan, nullptr, o.output, o.report, o.exports, say, o.input, scan.degenerate_faces);
   }
 
   // No parameters: flatten a mesh, or reconstruct and flatten a point cloud.
@@ -459,7 +464,7 @@ int run_fit(const FitCommandOptions& given) {
   };
   ParameterizedScan first = parameterize_scan(scan, po);
   if (!o.all_components)
-    return fit_and_write(o, &first, nullptr, densify, o.output, o.report, o.exports, say, o.input);
+    return fit_and_write(o, &first, nullptr, densify, o.output, o.report, o.exports, say, o.input, scan.degenerate_faces);
 
   // Every component to its own files: OUT-K.tbs, REPORT-K.json, EXPORT-K.ext.
   const int count = first.report.topology.components;
@@ -473,7 +478,7 @@ int run_fit(const FitCommandOptions& given) {
       po.component = k;
       ParameterizedScan p = k == 1 ? std::move(first) : parameterize_scan(scan, po);
       const int code = fit_and_write(o, &p, nullptr, densify, numbered(o.output, k),
-                                     o.report.empty() ? "" : numbered(o.report, k), exports, say, o.input);
+                                     o.report.empty() ? "" : numbered(o.report, k), exports, say, o.input, scan.degenerate_faces);
       if (code != kOk) return code;
     } catch (const InvalidInput& e) {
       // A component that cannot be fitted (too small, wrong topology) does not stop the others.

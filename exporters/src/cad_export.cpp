@@ -6,6 +6,10 @@
 #include <tbs/io.h>
 
 #include <APIHeaderSection_MakeHeader.hxx>
+#include <StepData_Protocol.hxx>
+#include <StepData_StepModel.hxx>
+#include <StepData_StepWriter.hxx>
+#include <XSControl_WorkSession.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_Sewing.hxx>
 #include <BRepCheck_Analyzer.hxx>
@@ -14,6 +18,7 @@
 #include <IGESData_GlobalSection.hxx>
 #include <IGESData_IGESModel.hxx>
 #include <TColStd_HSequenceOfHAsciiString.hxx>
+#include <TCollection_ExtendedString.hxx>
 #include <IGESControl_Writer.hxx>
 #include <Interface_Static.hxx>
 #include <Message.hxx>
@@ -34,6 +39,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <mutex>
 
@@ -135,6 +141,20 @@ void quiet_occt() {
 
 namespace {
 
+// A name for STEP and IGES text fields, which OCCT writes byte for byte although both formats
+// want plain ASCII there: each other character (UTF-8 decoded by OCCT; invalid bytes become
+// U+FFFD first) is replaced by '_', control characters included.
+std::string ascii_name(const std::string& text) {
+  const TCollection_ExtendedString wide(valid_utf8(text).c_str(), Standard_True);
+  std::string out;
+  for (int i = 1; i <= wide.Length(); ++i) {
+    const Standard_ExtCharacter c = wide.Value(i);
+    if (c >= 0xDC00 && c <= 0xDFFF) continue;  // second half of a surrogate pair
+    out += c >= 0x20 && c < 0x7F ? static_cast<char>(c) : '_';
+  }
+  return out;
+}
+
 // The steps every CAD writer shares: check the unit, take OCCT's process-wide settings for
 // this call, build and check the shape, let `write` translate it into the temporary file of
 // an AtomicOutput, commit, and turn OCCT's exceptions into ours.
@@ -168,19 +188,29 @@ CadExportReport write_step(const std::string& path, const TrianglePatchSet& ps, 
     Interface_Static::SetCVal("xstep.cascade.unit", unit);
     Interface_Static::SetCVal("write.step.unit", unit);
     Interface_Static::SetCVal("write.step.schema", o.schema == StepSchema::AP242 ? "AP242DIS" : "AP214IS");
-    Interface_Static::SetCVal("write.step.product.name", o.product_name.c_str());
+    const std::string product = ascii_name(o.product_name), description = ascii_name(o.description);
+    Interface_Static::SetCVal("write.step.product.name", product.c_str());
     STEPControl_Writer writer;
     if (writer.Transfer(shape, STEPControl_AsIs) != IFSelect_RetDone)
       throw Error("STEP export: OpenCASCADE could not translate the shape");
     APIHeaderSection_MakeHeader header(writer.Model());
-    header.SetName(new TCollection_HAsciiString(o.product_name.c_str()));
+    header.SetName(new TCollection_HAsciiString(product.c_str()));
     header.SetOriginatingSystem(new TCollection_HAsciiString("tbs"));
     header.SetAuthorValue(1, new TCollection_HAsciiString("tbs"));
     header.SetOrganizationValue(1, new TCollection_HAsciiString(""));
     header.SetAuthorisation(new TCollection_HAsciiString(""));
-    if (!o.description.empty()) header.SetDescriptionValue(1, new TCollection_HAsciiString(o.description.c_str()));
-    if (writer.Write(temp.c_str()) != IFSelect_RetDone)
-      throw IoError(path + ": OpenCASCADE could not write the STEP file");
+    if (!description.empty()) header.SetDescriptionValue(1, new TCollection_HAsciiString(description.c_str()));
+    // Written through our own stream: OCCT's Write(filename) decodes the path as UTF-8, so a
+    // name with other bytes (legal on Linux) went to a different file.
+    const Handle(StepData_StepModel) model = writer.Model();
+    const Handle(StepData_Protocol) protocol = Handle(StepData_Protocol)::DownCast(writer.WS()->Protocol());
+    if (model.IsNull() || protocol.IsNull()) throw Error("STEP export: OpenCASCADE has no STEP model to write");
+    StepData_StepWriter step(model);
+    step.SendModel(protocol);
+    std::ofstream os(temp, std::ios::binary | std::ios::trunc);
+    const bool printed = os && step.Print(os);
+    os.flush();
+    if (!printed || !os) throw IoError(path + ": could not write the STEP file (disk full or no permission?)");
   });
 }
 
@@ -196,16 +226,20 @@ CadExportReport write_iges(const std::string& path, const TrianglePatchSet& ps, 
     // Global section: product, file name, sender; the description goes into the start
     // section, in lines of at most 72 characters.
     IGESData_GlobalSection& g = writer.Model()->ChangeGlobalSection();
-    g.SetSendName(new TCollection_HAsciiString(o.product_name.c_str()));
-    g.SetFileName(new TCollection_HAsciiString(std::filesystem::path(path).filename().c_str()));
+    const std::string product = ascii_name(o.product_name), description = ascii_name(o.description);
+    g.SetSendName(new TCollection_HAsciiString(product.c_str()));
+    g.SetFileName(new TCollection_HAsciiString(ascii_name(std::filesystem::path(path).filename().string()).c_str()));
     g.SetSystemId(new TCollection_HAsciiString("tbs"));
     g.SetAuthorName(new TCollection_HAsciiString("tbs"));
     Handle(TColStd_HSequenceOfHAsciiString) start = new TColStd_HSequenceOfHAsciiString;
-    const std::string text = o.product_name + (o.description.empty() ? "" : ": " + o.description);
+    const std::string text = product + (description.empty() ? "" : ": " + description);
     for (size_t i = 0; i < text.size(); i += 72)
       start->Append(new TCollection_HAsciiString(text.substr(i, 72).c_str()));
     writer.Model()->SetStartSection(start);
-    if (!writer.Write(temp.c_str())) throw IoError(path + ": OpenCASCADE could not write the IGES file");
+    std::ofstream os(temp, std::ios::binary | std::ios::trunc);
+    const bool printed = os && writer.Write(os);
+    os.flush();
+    if (!printed || !os) throw IoError(path + ": could not write the IGES file (disk full or no permission?)");
   });
 }
 

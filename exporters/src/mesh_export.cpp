@@ -125,7 +125,7 @@ MeshExportReport write_gltf(const std::string& path, const Mesh& mesh, const Box
 
   tinygltf::Model m;
   m.asset.version = "2.0";
-  m.asset.generator = o.generator;
+  m.asset.generator = valid_utf8(o.generator);
   m.buffers.resize(1);
   tinygltf::Primitive prim;
   tinygltf::Value color_extras;
@@ -181,13 +181,13 @@ MeshExportReport write_gltf(const std::string& path, const Mesh& mesh, const Box
     m.accessors[prim.indices].maxValues = {double(hi)};
   }
   tinygltf::Mesh gm;
-  gm.name = o.name;
+  gm.name = valid_utf8(o.name);
   gm.extras = color_extras;
   gm.primitives.push_back(prim);
   m.meshes.push_back(gm);
   tinygltf::Node node;
   node.mesh = 0;
-  node.name = o.name;
+  node.name = valid_utf8(o.name);
   m.nodes.push_back(node);
   tinygltf::Scene scene;
   scene.nodes.push_back(0);
@@ -219,7 +219,7 @@ MeshExportReport write_gltf(const std::string& path, const Mesh& mesh, const Box
     throw IoError(path + ": tinygltf could not serialise the mesh");
   nlohmann::ordered_json doc = nlohmann::ordered_json::parse(out.str());
   doc["buffers"][0] = {{"byteLength", data.size()}, {"uri", uri_of(bin.filename().string())}};
-  const std::string text = doc.dump(2) + "\n";
+  const std::string text = doc.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n";
   AtomicOutput bin_out(bin.string()), gltf_out(path);
   bin_out.write(std::string_view(reinterpret_cast<const char*>(data.data()), data.size()));
   gltf_out.write(text);

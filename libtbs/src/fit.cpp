@@ -124,7 +124,7 @@ std::string FitReport::to_json(bool with_times) const {
                  {"max_error", x.max_error},
                  {"rms_error", x.rms_error}});
   j["rounds"] = r;
-  return j.dump(2);
+  return j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
 }
 
 namespace {

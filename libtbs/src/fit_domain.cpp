@@ -20,9 +20,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <deque>
 #include <map>
 #include <numbers>
+#include <numeric>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -283,6 +285,22 @@ size_t keep_largest_component(Region& r, std::span<const Point2> uv) {
 
 // Bare parameters: Delaunay triangulation, minus triangles much larger than the local point
 // spacing (an alpha shape), so concave outlines and holes of the data are kept.
+// Marks as not excluded every point whose (u, v) equals that of a point that is not.
+void include_duplicates(std::span<const Point2> uv, std::vector<char>& excluded) {
+  std::vector<int> order(uv.size());
+  std::iota(order.begin(), order.end(), 0);
+  auto key = [&](int i) { return std::pair(uv[i].x(), uv[i].y()); };
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return key(a) < key(b); });
+  for (size_t i = 0; i < order.size();) {
+    size_t j = i;
+    bool used = false;
+    for (; j < order.size() && key(order[j]) == key(order[i]); ++j) used |= !excluded[order[j]];
+    if (used)
+      for (size_t k = i; k < j; ++k) excluded[order[k]] = 0;
+    i = j;
+  }
+}
+
 Region region_from_points(std::span<const Point2> uv) {
   std::vector<std::pair<CPoint, int>> pts;
   pts.reserve(uv.size());
@@ -728,9 +746,21 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
     area += 0.5 * signed_area2(in.uv[t[0]], in.uv[t[1]], in.uv[t[2]]);
     for (int v : t) m.excluded[v] = 0, box.extend(in.uv[v]);
   }
+  // Bare points at the same (u, v) as a point of the region (duplicates in the scan) share its
+  // Delaunay vertex, so no triangle names them: they belong to the region too.
+  if (in.faces.empty()) include_duplicates(in.uv, m.excluded);
   const double extent = std::max(box.max.x() - box.min.x(), box.max.y() - box.min.y());
   if (!(area > 0) || !(extent > 0))
     throw InvalidInput("the parameters (u, v) do not span an area");
+  // A sliver region (parameters close to a curve) would be meshed with triangles of its width
+  // along its whole length: millions of vertices. Even a 1:1000 strip is far above this.
+  if (area < 1e-8 * extent * extent)
+  {
+    char text[160];
+    std::snprintf(text, sizeof text, "the parameters (u, v) span almost no area (%.4g over an extent of %.4g)",
+                  area, extent);
+    throw InvalidInput(std::string(text) + ": they lie close to a curve; the fit needs parameters that span a region");
+  }
   // Vertices on a power-of-two grid: exact midpoints and dyadic fractions keep feature knots
   // exactly collinear (knots.h, default_knots).
   m.grid = std::ldexp(1.0, static_cast<int>(std::ceil(std::log2(extent))) - 24);

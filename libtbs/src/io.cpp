@@ -92,6 +92,15 @@ struct Reader {
   }
 };
 
+}  // namespace
+
+std::string valid_utf8(std::string_view text) {
+  return json::parse(json(std::string(text)).dump(-1, ' ', false, json::error_handler_t::replace))
+      .get<std::string>();
+}
+
+namespace {
+
 // Error text may quote bytes of a binary file: keep messages printable on any terminal.
 std::string printable(std::string s) {
   for (char& c : s)
@@ -107,7 +116,7 @@ void pretty(const json& j, std::string& out, int indent) {
     out += "{\n";
     size_t i = 0;
     for (auto it = j.begin(); it != j.end(); ++it, ++i) {
-      out += pad + json(it.key()).dump() + ": ";
+      out += pad + json(it.key()).dump(-1, ' ', false, json::error_handler_t::replace) + ": ";
       pretty(it.value(), out, indent + 2);
       out += i + 1 < j.size() ? ",\n" : "\n";
     }
@@ -119,12 +128,12 @@ void pretty(const json& j, std::string& out, int indent) {
       if (j[i].is_object())
         pretty(j[i], out, indent + 2);
       else
-        out += j[i].dump();
+        out += j[i].dump(-1, ' ', false, json::error_handler_t::replace);
       out += i + 1 < j.size() ? ",\n" : "\n";
     }
     out += std::string(static_cast<size_t>(indent), ' ') + "]";
   } else {
-    out += j.dump();
+    out += j.dump(-1, ' ', false, json::error_handler_t::replace);
   }
 }
 

@@ -24,11 +24,13 @@
 #include <CGAL/box_intersection_d.h>
 
 #include <Eigen/CholmodSupport>
+#include <Eigen/Geometry>
 #include <Eigen/Sparse>
 #include <Eigen/SparseLU>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cstdio>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -47,6 +49,13 @@ using SM = CGAL::Surface_mesh<P3>;
 using Tri = std::array<int, 3>;
 namespace PMP = CGAL::Polygon_mesh_processing;
 namespace SMP = CGAL::Surface_mesh_parameterization;
+
+// A number for a message, in 4 significant digits.
+std::string short_number(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4g", x);
+  return buf;
+}
 
 std::string plural(size_t n, const char* one, const char* many) {
   return std::to_string(n) + " " + (n == 1 ? one : many);
@@ -660,7 +669,7 @@ std::string ParameterizeReport::to_json() const {
   j["subdivisions"] = subdivisions;
   j["points_added"] = points_added;
   j["seconds"] = seconds;
-  return j.dump();
+  return j.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
 }
 
 ParameterizedScan parameterize_scan(const Scan& scan, const ParameterizeOptions& o) {
@@ -738,10 +747,31 @@ ParameterizedScan parameterize_scan(const Scan& scan, const ParameterizeOptions&
                             plural(rep.used.vertices, "vertex", "vertices") + ", " +
                             plural(size_t(rep.used.boundary_loops), "boundary loop", "boundary loops") +
                             ", genus " + std::to_string(rep.used.genus);
+  {
+    // Faces that are all slivers (nearly collinear corners) survive the exact degeneracy test
+    // but flatten onto a curve.
+    double area = 0;
+    Eigen::AlignedBox3d box;
+    for (const Tri& t : part.faces) {
+      const Point3 &a = part.points[t[0]], &b = part.points[t[1]], &c = part.points[t[2]];
+      area += 0.5 * (b - a).cross(c - a).norm();
+      box.extend(a), box.extend(b), box.extend(c);
+    }
+    const double diagonal = box.diagonal().norm();
+    if (!(area > 1e-10 * diagonal * diagonal))
+      throw InvalidInput(name + ": " + found + ", but its " + plural(part.faces.size(), "face has", "faces have") +
+                         " almost no area (" + short_number(area) + " in a box of diagonal " +
+                         short_number(diagonal) + "): they are slivers; remesh the scan");
+  }
   if (rep.used.genus > 0)
     throw InvalidInput(name + ": " + found + ": tbs fits one surface that unfolds onto the plane (a disk, "
-                       "possibly with holes, or a closed surface of genus 0); cut this one open into a disk "
-                       "(e.g. in Blender or MeshLab) or split it into pieces and fit each");
+                       "possibly with holes, or a closed surface of genus 0); " +
+                       (rep.input == "point cloud"
+                            ? std::string("the surface reconstructed from the points has handles, which happens "
+                                          "when the points are too sparse for the surface's curvature; give a "
+                                          "denser scan or a mesh")
+                            : std::string("cut this one open into a disk (e.g. in Blender or MeshLab) or split it "
+                                          "into pieces and fit each")));
   if (rep.used.boundary_loops == 0) {
     if (!o.cut_closed)
       throw InvalidInput(name + ": " + found + ": the surface is closed; cut it open into a disk, or allow a seam");

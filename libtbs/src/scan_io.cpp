@@ -12,6 +12,7 @@
 #include <tiny_obj_loader.h>
 
 #include <algorithm>
+#include <bit>
 #include <cctype>
 #include <cerrno>
 #include <charconv>
@@ -75,6 +76,7 @@ struct Ctx {
   std::uintmax_t file_size = 0;
   std::size_t limit = 0;  // max_points, capped to what an int index can address
   std::string limit_name;
+  mutable std::size_t dropped = 0;  // faces (fan triangles) without three distinct corners
 
   [[noreturn]] void fail(const std::string& where, const std::string& what) const {
     throw InvalidInput(path + (where.empty() ? "" : ":" + where) + ": " + what);
@@ -136,10 +138,14 @@ struct Ctx {
                         std::to_string(corners[j]) + ", but the vertices are numbered 0 to " +
                         std::to_string(count) +
                         " - 1; the file is corrupt or its faces belong to another vertex list");
+    if (corners.size() < 3) ++dropped;
     for (std::size_t j = 1; j + 1 < corners.size(); ++j) {
       const std::array<int, 3> t{static_cast<int>(corners[0]), static_cast<int>(corners[j]),
                                  static_cast<int>(corners[j + 1])};
-      if (t[0] != t[1] && t[1] != t[2] && t[0] != t[2]) out.push_back(t);
+      if (t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+        out.push_back(t);
+      else
+        ++dropped;
     }
   }
 
@@ -148,6 +154,7 @@ struct Ctx {
       fail("", "the file has no points; check that it is the scan you meant");
     check_count("", scan.positions.size(), "the file has");
     scan.source = path;
+    scan.degenerate_faces = dropped;
   }
 };
 
@@ -833,6 +840,26 @@ Scan read_stl(const Ctx& c) {
                      "; the file is truncated or corrupt");
   }
 
+  // CGAL merges corners through an ordered map of positions, which a NaN corrupts (the facet
+  // vanishes without an error). Binary facets are checked here first; an ASCII file never
+  // matches a non-finite float (that needs a byte of 0x80 or more).
+  if (binary_layout) {
+    is.clear();
+    is.seekg(84);
+    char rec[50];
+    for (std::uint32_t f = 0; f < declared && is.read(rec, sizeof rec); ++f)
+      for (int corner = 0; corner < 3; ++corner) {
+        double xyz[3];
+        for (int k = 0; k < 3; ++k) {
+          const char* b = rec + 12 * (1 + corner) + 4 * k;
+          std::uint32_t bits = 0;
+          for (int i = 3; i >= 0; --i) bits = (bits << 8) | static_cast<unsigned char>(b[i]);
+          xyz[k] = std::bit_cast<float>(bits);
+        }
+        c.point({"facet", f}, xyz[0], xyz[1], xyz[2]);
+      }
+  }
+
   is.clear();
   is.seekg(0);
   std::vector<std::array<double, 3>> points;
@@ -1039,6 +1066,9 @@ Scan read_obj(const Ctx& c) {
             corner_v[0] != corner_v[j + 1])
           scan.triangles.push_back({static_cast<int>(corners[0]), static_cast<int>(corners[j]),
                                     static_cast<int>(corners[j + 1])});
+        else
+          ++c.dropped;
+      if (corners.size() < 3) ++c.dropped;
     }
   }
 

@@ -2,7 +2,9 @@
 """Runs tbs on every case of tests/data/bad/cases.json (written by scripts/make_bad_inputs.py)
 and on a missing file and a directory. Each must end within 60 s and 2 GiB of address space,
 with the exit code the manifest documents, one line on stderr of the form
-"tbs: error: ..." that names the file, and no file left in the output directory.
+"tbs: error: ..." that names the file, and no file left in the output directory. A case that
+tbs repairs (exit 0) must instead write the .tbs, print nothing on stderr, and name the repair
+in its summary (the manifest's "stdout" text).
 
     bad_inputs_check.py TBS_EXE SOURCE_DIR WORK_DIR [--markdown] [--sanitized]
 
@@ -59,14 +61,25 @@ for c in cases:
     problems = []
     if r.returncode != c["exit"]:
         problems.append("exit %d, documented %d" % (r.returncode, c["exit"]))
-    if len(lines) != 1:
-        problems.append("%d lines on stderr" % len(lines))
-    elif not lines[0].startswith("tbs: error: ") or c["file"] not in lines[0]:
-        problems.append("the message does not name the file")
     left = os.listdir(out_dir)
-    if left:
-        problems.append("left files: %s" % left)
-    message = lines[-1] if lines else "(no message)"
+    if c["exit"] == 0:
+        # Repaired: fitted, nothing on stderr (-q), and the summary says what was repaired.
+        said = [l for l in r.stdout.splitlines() if c["stdout"] in l]
+        if lines:
+            problems.append("%d lines on stderr" % len(lines))
+        if not said:
+            problems.append("the summary lacks '%s'" % c["stdout"])
+        if left != ["out.tbs"]:
+            problems.append("files written: %s, expected out.tbs" % left)
+        message = said[0] if said else "(no summary line)"
+    else:
+        if len(lines) != 1:
+            problems.append("%d lines on stderr" % len(lines))
+        elif not lines[0].startswith("tbs: error: ") or c["file"] not in lines[0]:
+            problems.append("the message does not name the file")
+        if left:
+            problems.append("left files: %s" % left)
+        message = lines[-1] if lines else "(no message)"
     print("%-28s exit %d  %s" % (c["file"], r.returncode, message))
     rows.append("| `%s` | %s | %s | %d | %s |" % (c["file"], c["what"], c["command"], r.returncode,
                                                  message.replace("|", "\\|").replace(work, "WORK")))
@@ -74,11 +87,11 @@ for c in cases:
         failures.append("%s (%s): %s; stderr: %s" % (c["file"], c["what"], "; ".join(problems), r.stderr.strip()[:400]))
 
 if markdown:
-    print("\n| file | what is wrong | command | exit | message |\n|---|---|---|---|---|")
+    print("\n| file | what is wrong | command | exit | message (for exit 0: the summary line) |\n|---|---|---|---|---|")
     print("\n".join(rows))
 if failures:
     print("\n%d of %d cases failed:" % (len(failures), len(cases)), file=sys.stderr)
     for f in failures:
         print("  " + f, file=sys.stderr)
     sys.exit(1)
-print("all %d cases: documented exit code, one line naming the file, nothing left behind" % len(cases))
+print("all %d cases: documented exit code; failures one line naming the file and nothing left behind, repairs fitted and named in the summary" % len(cases))

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <csignal>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -623,6 +624,58 @@ TEST(CliFit, ExportsInTheSameCall) {
   EXPECT_EQ(r.code, 3);
   EXPECT_NE(r.err.find("would overwrite the scan or the .tbs"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "h.glb"));
+}
+
+// Linux file names are bytes: not UTF-8, quotes and backslashes must still give valid files
+// under the names asked for (OCCT's own file writing decoded the name and wrote elsewhere).
+TEST(CliFit, OddFileNamesGiveValidFiles) {
+  const fs::path dir = temp_dir() / "odd";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  auto quote = [](const std::string& s) {
+    std::string q = "'";
+    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+  };
+  const std::string stem = "it's \xC3\xA9t\xE9 \\ x";  // valid UTF-8, then a lone Latin-1 byte
+  const fs::path scan = dir / (stem + ".xyz"), tbs = dir / (stem + ".tbs"), report = dir / (stem + ".json"),
+                 glb = dir / (stem + ".glb"), step = dir / (stem + ".step"), iges = dir / (stem + ".igs");
+  fs::copy_file(std::string(TBS_SOURCE_DIR) + "/tests/data/bad/xyz_duplicate_points.xyz", scan);
+  Result r = run("fit " + quote(scan.string()) + " -o " + quote(tbs.string()) + " --report " + quote(report.string()) +
+                 " --export " + quote(glb.string()) + " -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const fs::path& cad : {step, iges}) {
+    r = run("convert " + quote(tbs.string()) + " " + quote(cad.string()) + " --cad-tolerance 1e-3 -q");
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
+  // Exactly these files: nothing under a mangled name, no temporary file left.
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  std::vector<std::string> want;
+  for (const fs::path& p : {scan, tbs, report, glb, step, iges}) want.push_back(p.filename().string());
+  std::sort(want.begin(), want.end());
+  EXPECT_EQ(names, want);
+  // JSON holds the name with U+FFFD for the byte that is not UTF-8.
+  const json meta = json::parse(read_tbs(tbs.string()).metadata_json);
+  EXPECT_EQ(meta["source"], "it's \xC3\xA9t\xEF\xBF\xBD \\ x.xyz");
+  EXPECT_NO_THROW((void)json::parse(read_file(report.string())));
+  const std::string g = read_file(glb.string());
+  ASSERT_GT(g.size(), 20u);
+  EXPECT_EQ(g.substr(0, 4), "glTF");
+  uint32_t chunk = 0;
+  std::memcpy(&chunk, g.data() + 12, 4);
+  const json gltf = json::parse(g.substr(20, chunk));
+  EXPECT_EQ(gltf["meshes"][0]["name"], "it's \xC3\xA9t\xEF\xBF\xBD \\ x");
+  // STEP and IGES: complete, and ASCII only (both formats expect it in names and headers).
+  for (const fs::path& cad : {step, iges}) {
+    const std::string text = read_file(cad.string());
+    ASSERT_GT(text.size(), 1000u) << cad;
+    EXPECT_TRUE(std::all_of(text.begin(), text.end(), [](char c) { return static_cast<unsigned char>(c) < 0x80; }))
+        << cad;
+  }
+  EXPECT_EQ(read_file(step.string()).substr(0, 13), "ISO-10303-21;");
+  EXPECT_NE(read_file(step.string()).find("FILE_NAME('it''s _t_ \\\\ x'"), std::string::npos);
 }
 
 TEST(CliConvert, ExactAndOptions) {

@@ -39,9 +39,11 @@ struct CadExportOptions {
   /// Length unit of the coordinates, written into the file: mm, cm, m, um, in, ft. The
   /// coordinates are written as they are, in this unit.
   std::string units = "mm";
+  /// The product (STEP PRODUCT and FILE_NAME, IGES sender). Written in ASCII, as both formats
+  /// expect: every other character becomes '_'.
   std::string product_name = "tbs surface";
   /// Free text for the file header (STEP FILE_DESCRIPTION, IGES start section): e.g. the
-  /// fit report.
+  /// fit report. ASCII as product_name.
   std::string description;
   StepSchema schema = StepSchema::AP214;
   TriangleFaces faces = TriangleFaces::Quads;

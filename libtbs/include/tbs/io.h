@@ -90,6 +90,16 @@ void remove_pending_outputs() noexcept;
 /// \throw IoError if the temporary file cannot be created, written or renamed.
 void write_file_atomic(const std::string& path, std::string_view data);
 
+/// `text` with every byte sequence that is not valid UTF-8 replaced by U+FFFD. File names on
+/// Linux are bytes; names written into JSON (.tbs metadata, reports, glTF) must be UTF-8.
+/// \throw nothing but std::bad_alloc.
+std::string valid_utf8(std::string_view text);
+
+/// `text` with every byte sequence that is not valid UTF-8 replaced by U+FFFD. File names on
+/// Linux are bytes; names written into JSON (.tbs metadata, reports, glTF) must be UTF-8.
+/// \throw nothing but std::bad_alloc.
+std::string valid_utf8(std::string_view text);
+
 /// Reads a whole file. \throw IoError with the path and the system's reason.
 std::string read_file(const std::string& path);
 

@@ -20,6 +20,9 @@ struct Scan {
   std::vector<Point2> uv;                     ///< empty, or one per position
   std::vector<std::array<int, 3>> triangles;  ///< empty for bare points; indices into positions
   std::string source;                         ///< the path it was read from
+  /// Faces the reader left out: polygons with fewer than three corners, and triangles (of a
+  /// polygon's fan) with a repeated corner.
+  std::size_t degenerate_faces = 0;
   bool has_normals() const { return !normals.empty(); }
   bool has_uv() const { return !uv.empty(); }
   bool has_faces() const { return !triangles.empty(); }
@@ -49,7 +52,8 @@ struct ScanReadOptions {
 /// - XYZ/TXT: one point per line with 3, 5, 6 or 8 numbers: `x y z`, `x y z u v`,
 ///   `x y z nx ny nz` or `x y z u v nx ny nz`; empty lines and lines starting with `#` skipped.
 ///
-/// Polygons are fan-triangulated; triangles with a repeated corner are dropped. Normals are
+/// Polygons are fan-triangulated; triangles with a repeated corner and polygons with fewer
+/// than three corners are dropped and counted in Scan::degenerate_faces. Normals are
 /// normalised. Elements are numbered as their format numbers them in messages: from 0 in PLY,
 /// OFF and STL, from 1 in OBJ (`v 3`, `face 2`), by line in XYZ.
 ///
