@@ -301,7 +301,11 @@ int run_convert(const ConvertOptions& o) {
       say(line);
     }
   }
-  say("writing " + std::to_string(patches.size()) + " patches to " + o.output);
+  say("writing " + std::to_string(patches.size()) + " patches to " + o.output +
+      (patches.size() > 10'000 ? " (many patches take minutes: OpenCASCADE sews every face; a larger --cad-tolerance "
+                                 "gives fewer)"
+                               : ""));
+  eo.progress = say;
   const CadExportReport r = format == "step" ? write_step(o.output, patches, eo) : write_iges(o.output, patches, eo);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 

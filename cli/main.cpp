@@ -204,7 +204,8 @@ int main(int argc, char** argv) {
                           "units; mm if it has none). Coordinates are not scaled.")
       ->check(CLI::IsMember({"mm", "cm", "m", "um", "in", "ft"}));
   convert_cmd->add_option("--product-name", convert.product_name,
-                          "Product name in the file (default: the output's file name)");
+                          "Product name in the file (default: the output's file name); STEP and IGES get it in "
+                          "ASCII, other characters as _");
   convert_cmd->add_option("--threads,-t", convert.threads, "Worker threads (0 = all cores)")
       ->check(CLI::NonNegativeNumber);
   convert_cmd->add_flag("--quiet,-q", convert.quiet, "No progress messages on stderr");

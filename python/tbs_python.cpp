@@ -215,7 +215,11 @@ tbs::Scan scan_from(const Array& points, const std::optional<Array>& uv, const s
     const Array a = checked(*normals, 3, "normals");
     if (a.shape(0) != p.shape(0)) throw tbs::InvalidInput("normals must have one row per point");
     auto r = a.unchecked<2>();
-    for (py::ssize_t i = 0; i < a.shape(0); ++i) s.normals.emplace_back(r(i, 0), r(i, 1), r(i, 2));
+    for (py::ssize_t i = 0; i < a.shape(0); ++i) {
+      // Normalised here (fit() wants unit normals); a zero normal stays and is refused there.
+      const tbs::Vector3 n(r(i, 0), r(i, 1), r(i, 2));
+      s.normals.push_back(n.norm() > 0 ? tbs::Vector3(n.normalized()) : n);
+    }
   }
   if (faces) {
     if (faces->ndim() != 2 || faces->shape(1) != 3)

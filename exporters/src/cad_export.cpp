@@ -23,6 +23,8 @@
 #include <Interface_Static.hxx>
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
+#include <Message_ProgressIndicator.hxx>
+#include <Message_ProgressScope.hxx>
 #include <STEPControl_Controller.hxx>
 #include <STEPControl_Writer.hxx>
 #include <ShapeAnalysis_FreeBounds.hxx>
@@ -42,6 +44,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <typeinfo>
 
 namespace tbs {
 
@@ -83,6 +86,24 @@ Handle(Geom_BSplineSurface) bspline(std::span<const Point3> cps, int m) {
   return new Geom_BSplineSurface(poles, knots, knots, mults, mults, m, m);
 }
 
+// OCCT's progress (sewing) as lines "<what>: N %", every 10 %.
+class SayProgress : public Message_ProgressIndicator {
+ public:
+  SayProgress(const std::function<void(const std::string&)>& say, std::string what)
+      : say_(say), what_(std::move(what)) {}
+  void Show(const Message_ProgressScope&, const Standard_Boolean) override {
+    const int percent = static_cast<int>(GetPosition() * 100);
+    if (percent < next_) return;
+    next_ = percent / 10 * 10 + 10;
+    say_(what_ + ": " + std::to_string(percent / 10 * 10) + " %");
+  }
+
+ private:
+  const std::function<void(const std::string&)>& say_;
+  std::string what_;
+  int next_ = 10;
+};
+
 struct Built {
   TopoDS_Shape shape;
   CadExportReport report;
@@ -101,6 +122,10 @@ Built build_shape(const TrianglePatchSet& ps, const CadExportOptions& o) {
   b.report.sewing_tolerance = o.sewing_tolerance > 0 ? o.sewing_tolerance : 1e-7 * size;
   BRepBuilderAPI_Sewing sewing(b.report.sewing_tolerance);
   const size_t nb = static_cast<size_t>(beta_count(m));
+  auto say = [&](const std::string& line) {
+    if (o.progress) o.progress(line);
+  };
+  say("making the B-spline faces of " + std::to_string(ps.size()) + " patches");
   for (size_t p = 0; p < ps.size(); ++p) {
     const std::span<const Point3> net(ps.control_points.data() + p * nb, nb);
     std::vector<std::vector<Point3>> quads;
@@ -117,10 +142,17 @@ Built build_shape(const TrianglePatchSet& ps, const CadExportOptions& o) {
       ++b.report.faces;
     }
   }
-  sewing.Perform();
+  say("sewing " + std::to_string(b.report.faces) + " faces");
+  if (o.progress) {
+    Handle(SayProgress) indicator = new SayProgress(o.progress, "sewing");
+    sewing.Perform(indicator->Start());
+  } else {
+    sewing.Perform();
+  }
   b.shape = sewing.SewedShape();
   for (TopExp_Explorer e(b.shape, TopAbs_SHELL); e.More(); e.Next()) ++b.report.shells;
   b.report.free_edges = static_cast<size_t>(sewing.NbFreeEdges());
+  say("checking the shape");
   BRepCheck_Analyzer check(b.shape);
   if (!check.IsValid())
     throw Error("CAD export: the sewn shape is not valid for OpenCASCADE (BRepCheck_Analyzer); nothing was written");
@@ -176,7 +208,13 @@ CadExportReport export_shape(const char* format, const std::string& path, const 
     b.report.seconds = seconds_since(t0);
     return b.report;
   } catch (const Standard_Failure& e) {
-    throw Error(std::string(format) + " export: OpenCASCADE failed: " + e.GetMessageString());
+    throw Error(path + ": " + format + " export: OpenCASCADE failed: " + e.GetMessageString());
+  } catch (const IoError&) {
+    throw;
+  } catch (const Error& e) {
+    // Shape building and translation name no file.
+    if (typeid(e) != typeid(Error)) throw;
+    throw Error(path + ": " + e.what());
   }
 }
 
@@ -191,6 +229,7 @@ CadExportReport write_step(const std::string& path, const TrianglePatchSet& ps, 
     const std::string product = ascii_name(o.product_name), description = ascii_name(o.description);
     Interface_Static::SetCVal("write.step.product.name", product.c_str());
     STEPControl_Writer writer;
+    if (o.progress) o.progress("translating to STEP");
     if (writer.Transfer(shape, STEPControl_AsIs) != IFSelect_RetDone)
       throw Error("STEP export: OpenCASCADE could not translate the shape");
     APIHeaderSection_MakeHeader header(writer.Model());
@@ -205,6 +244,7 @@ CadExportReport write_step(const std::string& path, const TrianglePatchSet& ps, 
     const Handle(StepData_StepModel) model = writer.Model();
     const Handle(StepData_Protocol) protocol = Handle(StepData_Protocol)::DownCast(writer.WS()->Protocol());
     if (model.IsNull() || protocol.IsNull()) throw Error("STEP export: OpenCASCADE has no STEP model to write");
+    if (o.progress) o.progress("writing the STEP file");
     StepData_StepWriter step(model);
     step.SendModel(protocol);
     std::ofstream os(temp, std::ios::binary | std::ios::trunc);
@@ -220,6 +260,7 @@ CadExportReport write_iges(const std::string& path, const TrianglePatchSet& ps, 
     Interface_Static::SetCVal("xstep.cascade.unit", unit);
     Interface_Static::SetCVal("write.iges.unit", unit);
     Interface_Static::SetIVal("write.iges.brep.mode", 1);
+    if (o.progress) o.progress("translating to IGES");
     IGESControl_Writer writer(unit, 1);
     if (!writer.AddShape(shape)) throw Error("IGES export: OpenCASCADE could not translate the shape");
     writer.ComputeModel();
@@ -236,6 +277,7 @@ CadExportReport write_iges(const std::string& path, const TrianglePatchSet& ps, 
     for (size_t i = 0; i < text.size(); i += 72)
       start->Append(new TCollection_HAsciiString(text.substr(i, 72).c_str()));
     writer.Model()->SetStartSection(start);
+    if (o.progress) o.progress("writing the IGES file");
     std::ofstream os(temp, std::ios::binary | std::ios::trunc);
     const bool printed = os && writer.Write(os);
     os.flush();

@@ -193,7 +193,22 @@ size_t affordable_control_points(size_t points, int degree, size_t max_memory) {
 
 }  // namespace
 
+namespace {
+FitResult fit_scan(const Scan& scan, const FitOptions& opt);
+}
+
 FitResult fit(const Scan& scan, const FitOptions& opt) {
+  try {
+    return fit_scan(scan, opt);
+  } catch (const SolverError& e) {
+    // Solver messages name no input; messages start with the scan's name.
+    throw SolverError((scan.source.empty() ? std::string("<scan>") : scan.source) + ": " + e.what());
+  }
+}
+
+namespace {
+
+FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
   const auto t_start = Clock::now();
   check_options(opt);
   const std::string name = scan.source.empty() ? "<scan>" : scan.source;
@@ -214,6 +229,12 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
         (scan.has_normals() && !scan.normals[i].allFinite()))
       throw InvalidInput(name + ": point " + std::to_string(i) +
                          " has a non-finite coordinate, parameter or normal");
+    if (scan.positions[i].cwiseAbs().maxCoeff() > 1e30 || scan.uv[i].cwiseAbs().maxCoeff() > 1e30)
+      throw InvalidInput(name + ": point " + std::to_string(i) +
+                         " has a coordinate or parameter larger than 1e30 in magnitude");
+    if (scan.has_normals() && std::abs(scan.normals[i].norm() - 1) > 1e-6)
+      throw InvalidInput(name + ": normal " + std::to_string(i) + " has length " +
+                         std::to_string(scan.normals[i].norm()) + "; normals must be unit vectors");
   }
   for (const auto& t : scan.triangles)
     for (int v : t)
@@ -538,5 +559,7 @@ FitResult fit(const Scan& scan, const FitOptions& opt) {
     rep.stage_seconds.emplace_back(s, stage[s]);
   return res;
 }
+
+}  // namespace
 
 }  // namespace tbs

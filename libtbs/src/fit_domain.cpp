@@ -753,8 +753,8 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
   if (!(area > 0) || !(extent > 0))
     throw InvalidInput("the parameters (u, v) do not span an area");
   // A sliver region (parameters close to a curve) would be meshed with triangles of its width
-  // along its whole length: millions of vertices. Even a 1:1000 strip is far above this.
-  if (area < 1e-8 * extent * extent)
+  // along its whole length: millions of vertices. A 1:1000 strip is 100 times above this.
+  if (area < 1e-5 * extent * extent)
   {
     char text[160];
     std::snprintf(text, sizeof text, "the parameters (u, v) span almost no area (%.4g over an extent of %.4g)",

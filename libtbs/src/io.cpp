@@ -367,7 +367,13 @@ std::string format_tbs(const SplineFile& f) {
 }
 
 void write_tbs(const std::string& path, const SplineFile& file) {
-  write_file_atomic(path, format_tbs(file));
+  std::string text;
+  try {
+    text = format_tbs(file);
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(path + ": " + e.what());
+  }
+  write_file_atomic(path, text);
 }
 
 namespace {

@@ -500,17 +500,23 @@ std::vector<P2> flatten(const Mesh3& m, const ParameterizeOptions& o, Parameteri
       if ((m.points[v] - m.points[a]).squaredNorm() > (m.points[b] - m.points[a]).squaredNorm()) b = v;
     if (a == b) throw InvalidInput("the surface's boundary has no extent");
     say("flattening " + plural(m.faces.size(), "triangle", "triangles") + " (LSCM)");
-    uv = lscm(m, a, b);
-    Folds f = find_folds(m, uv, loops);
+    try {
+      uv = lscm(m, a, b);
+    } catch (const SolverError& e) {
+      if (o.method == FlattenMethod::Lscm) throw;
+      uv.clear();
+      rep.fallback_reason = std::string("LSCM could not be solved: ") + e.what();
+    }
+    Folds f = uv.empty() ? Folds{} : find_folds(m, uv, loops);
     if (f.flipped > m.faces.size() / 2) {  // a mirror image: LSCM keeps orientation, so only if
       for (P2& p : uv) p = P2(p.x(), -p.y());  // the pins made it so; flip back
       f = find_folds(m, uv, loops);
     }
-    if (f.ok()) {
+    if (!uv.empty() && f.ok()) {
       rep.method = "LSCM";
       return uv;
     }
-    rep.fallback_reason = "LSCM folds: " + f.describe();
+    if (!uv.empty()) rep.fallback_reason = "LSCM folds: " + f.describe();
     if (o.method == FlattenMethod::Lscm)
       throw InvalidInput("the LSCM parameterization folds (" + f.describe() + "); use the default method, which falls back to mean-value coordinates");
     say(rep.fallback_reason + "; using mean-value coordinates with a circular boundary");
@@ -685,6 +691,21 @@ ParameterizedScan parameterize_scan(const Scan& scan, const ParameterizeOptions&
   rep.input_points = scan.positions.size();
   rep.input_faces = scan.triangles.size();
   if (scan.positions.size() < 3) throw InvalidInput(name + ": too few points to parameterize (" + std::to_string(scan.positions.size()) + ")");
+  // What read_scan guarantees, checked again for scans built in code.
+  for (size_t i = 0; i < scan.positions.size(); ++i)
+    if (!scan.positions[i].allFinite() || scan.positions[i].cwiseAbs().maxCoeff() > 1e30)
+      throw InvalidInput(name + ": point " + std::to_string(i) + " is not finite or larger than 1e30 in magnitude");
+  if (!scan.normals.empty() && scan.normals.size() != scan.positions.size())
+    throw InvalidInput(name + ": " + std::to_string(scan.normals.size()) + " normals for " +
+                       std::to_string(scan.positions.size()) + " points; give one per point or none");
+  for (size_t i = 0; i < scan.normals.size(); ++i)
+    if (!scan.normals[i].allFinite() || !(scan.normals[i].norm() > 0))
+      throw InvalidInput(name + ": normal " + std::to_string(i) + " is not a finite, non-zero vector");
+  for (size_t f = 0; f < scan.triangles.size(); ++f)
+    for (int v : scan.triangles[f])
+      if (v < 0 || static_cast<size_t>(v) >= scan.positions.size())
+        throw InvalidInput(name + ": triangle " + std::to_string(f) + " refers to point " + std::to_string(v) +
+                           ", but the points are numbered 0 to " + std::to_string(scan.positions.size() - 1));
 
   std::vector<Tri> triangles = scan.triangles;
   if (cloud) {

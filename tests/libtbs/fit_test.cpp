@@ -133,6 +133,39 @@ TEST(Fit, OutlyingParametersAreLeftOutAndCounted) {
   for (size_t i = 3000; i < 3005; ++i) EXPECT_TRUE(std::isnan(r.error[i]));
 }
 
+// Duplicated bare points (overlapping scans) share a Delaunay vertex: they used to be left out
+// as if outside the region. Every copy is fitted, and each copy has the same error.
+TEST(Fit, DuplicatePointsAreAllFitted) {
+  auto f = [](double u, double v) { return Point3(u, v, 0.2 * std::sin(3 * u) * v); };
+  Scan s = random_scan(f, 800, 43);
+  const size_t n = s.positions.size();
+  for (size_t i = 0; i < n; i += 2) {
+    s.positions.push_back(s.positions[i]);
+    s.uv.push_back(s.uv[i]);
+  }
+  const FitResult r = fit(s, {});
+  EXPECT_EQ(r.report.points, s.positions.size());
+  EXPECT_EQ(r.report.points_excluded, 0u);
+  for (size_t i = 0, k = n; i < n; i += 2, ++k) EXPECT_EQ(r.error[i], r.error[k]) << i;
+}
+
+// Parameters along a thin sliver span a tiny area for their extent; the domain would need
+// millions of triangles of the sliver's width. Refused at once.
+TEST(Fit, SliverOfParametersIsRefused) {
+  Scan s;
+  for (int i = 0; i < 200; ++i) {
+    const double t = i / 199.0;
+    s.uv.emplace_back(t, 1e-6 * std::sin(20 * t) * (i % 2 ? 1 : -1));
+    s.positions.emplace_back(t, 0, 0.1 * t * t);
+  }
+  try {
+    fit(s, {});
+    ADD_FAILURE() << "accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("almost no area"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Fit, FoldedParametersAreRefused) {
   Scan s = grid_scan([](double u, double v) { return Point3(u, v, 0); }, 10, 10, 0, 1);
   std::swap(s.triangles[30][1], s.triangles[30][2]);  // one face flipped in uv

@@ -13,6 +13,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -329,6 +331,60 @@ TEST(Parameterize, RefusesTooLittle) {
   Scan line;
   for (int i = 0; i < 10; ++i) line.positions.emplace_back(i, 0, 0);
   EXPECT_THROW(parameterize_scan(line), InvalidInput);
+}
+
+// Scans built in code get the checks the readers make: each bad value is refused with a message
+// naming the scan and the element.
+TEST(Parameterize, RefusesInvalidScansBuiltInCode) {
+  const Scan good = grid(6, 6, paraboloid);
+  auto message = [](const Scan& s) {
+    try {
+      parameterize_scan(s);
+    } catch (const InvalidInput& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  Scan s = good;
+  s.source = "made.ply";
+  s.positions[7].y() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_NE(message(s).find("made.ply: point 7 is not finite"), std::string::npos) << message(s);
+  s = good;
+  s.positions[3].z() = 1e31;
+  EXPECT_NE(message(s).find("point 3"), std::string::npos) << message(s);
+  s = good;
+  s.triangles[5][1] = static_cast<int>(s.positions.size());
+  EXPECT_NE(message(s).find("triangle 5 refers to point 49"), std::string::npos) << message(s);
+  s = good;
+  s.triangles[2][0] = -1;
+  EXPECT_NE(message(s).find("triangle 2 refers to point -1"), std::string::npos) << message(s);
+  s = good;
+  s.normals.assign(5, Vector3(0, 0, 1));
+  EXPECT_NE(message(s).find("5 normals for 49 points"), std::string::npos) << message(s);
+  s = good;
+  s.normals.assign(s.positions.size(), Vector3(0, 0, 1));
+  s.normals[4] = Vector3::Zero();
+  EXPECT_NE(message(s).find("normal 4 is not"), std::string::npos) << message(s);
+  s = good;
+  s.normals.assign(s.positions.size(), Vector3(0, 0, 1));
+  EXPECT_EQ(message(s), "(accepted)");
+}
+
+// Faces that all have (nearly) collinear corners pass the exact degeneracy test; they used to
+// flatten onto a curve and hang the fitting domain's mesher. Refused, naming the slivers.
+TEST(Parameterize, SliverOnlyMeshIsRefused) {
+  Scan s;
+  // Rows of a grid whose z is linear along the row: corners collinear up to rounding.
+  for (int i = 0; i < 6; ++i) {
+    for (int j = 0; j < 6; ++j) s.positions.emplace_back(j, i, 0.1 * i * j);
+    for (int j = 0; j + 2 < 6; ++j) s.triangles.push_back({i * 6 + j, i * 6 + j + 1, i * 6 + j + 2});
+  }
+  try {
+    parameterize_scan(s);
+    ADD_FAILURE() << "accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("almost no area"), std::string::npos) << e.what();
+  }
 }
 
 // The meshes of the issue, from Debian's libcgal-demo: every one is flattened bijectively (the

@@ -491,7 +491,7 @@ TEST(ScanErrors, StlErrors) {
   bin = binary_stl();
   const float nan = std::numeric_limits<float>::quiet_NaN();
   std::memcpy(bin.data() + 84 + 12 + 4, &nan, 4);  // triangle 0, corner 0, y
-  expect_error(write("nan_bin.stl", bin), "vertex 0: y is nan");
+  expect_error(write("nan_bin.stl", bin), "facet 0: y is nan");
   const std::string ascii = kAsciiStl;
   expect_error(write("noend.stl", ascii.substr(0, ascii.find("endsolid"))),
                "no closing 'endsolid'");

@@ -106,6 +106,47 @@ expect_raises(tbs.InvalidInput, "points of shape (N, 2)", lambda: tbs.fit(points
 expect_raises(tbs.InvalidInput, "uv of another length", lambda: tbs.fit(points, uv[:10]))
 expect_raises(tbs.InvalidInput, "fit without uv", lambda: tbs.fit(points, None))
 expect_raises(tbs.IoError, "read_scan of a missing file", lambda: tbs.read_scan(os.path.join(WORK, "none.ply")))
+bad_points = points.copy()
+bad_points[5, 1] = np.nan
+expect_raises(tbs.InvalidInput, "a NaN point", lambda: tbs.fit(bad_points, uv))
+bad_points[5, 1] = 1e300
+expect_raises(tbs.InvalidInput, "a point at 1e300", lambda: tbs.fit(bad_points, uv))
+bad_uv = uv.copy()
+bad_uv[3, 0] = np.inf
+expect_raises(tbs.InvalidInput, "an infinite parameter", lambda: tbs.fit(points, bad_uv))
+expect_raises(tbs.InvalidInput, "collinear parameters", lambda: tbs.fit(points, np.stack([uv[:, 0], uv[:, 0]], 1)))
+expect_raises(tbs.InvalidInput, "a face index past the points",
+              lambda: tbs.fit(points, uv, faces=np.array([[0, 1, len(points)]])))
+expect_raises(tbs.InvalidInput, "a negative face index", lambda: tbs.fit(points, uv, faces=np.array([[0, -1, 2]])))
+expect_raises(tbs.InvalidInput, "faces of shape (F, 4)", lambda: tbs.fit(points, uv, faces=np.zeros((2, 4), int)))
+expect_raises(tbs.InvalidInput, "zero-length normals",
+              lambda: tbs.fit(points, uv, normals=np.zeros_like(points)))
+expect_raises(tbs.InvalidInput, "two points", lambda: tbs.fit(points[:2], uv[:2]))
+expect_raises(tbs.InvalidInput, "a negative tolerance", lambda: tbs.fit(points, uv, tolerance=-1))
+expect_raises(tbs.InvalidInput, "degree 9", lambda: tbs.fit(points, uv, degree=9))
+expect_raises(tbs.InvalidInput, "evaluate with uv of shape (N, 3)", lambda: spline.evaluate(np.zeros((4, 3))))
+# Every file of the bad-input corpus the command refuses is refused by read_scan (or by fit
+# when only parameters are wrong), with the module's exceptions, never a crash.
+corpus = json.load(open(os.path.join(SOURCE, "tests", "data", "bad", "cases.json")))
+refused = 0
+for case in corpus:
+    if case["exit"] == 0 or case["command"] != "fit" or case["file"].startswith("unknown"):
+        continue
+    path = os.path.join(SOURCE, "tests", "data", "bad", case["file"])
+    try:
+        s = tbs.read_scan(path)
+        if s["uv"] is None:
+            refused += 1  # refused by the command's flattening, which the module does not do
+            continue
+        tbs.fit(s["points"], s["uv"], s["normals"], s["faces"])
+        check(False, "corpus %s (%s) accepted" % (case["file"], case["what"]))
+    except (tbs.InvalidInput, tbs.IoError):
+        refused += 1
+    except Exception as e:  # noqa: BLE001
+        check(False, "corpus %s raises %s: %s" % (case["file"], type(e).__name__, e))
+check(refused > 40, "%d corpus files refused through read_scan and fit" % refused)
+expect_raises(tbs.InvalidInput, "read_scan of an unknown extension",
+              lambda: tbs.read_scan(os.path.join(SOURCE, "tests", "data", "bad", "unknown.foo")))
 
 scan = tbs.read_scan(os.path.join(SOURCE, "samples", "bracket.ply"))
 check(scan["points"].shape == (40933, 3) and scan["uv"].shape == (40933, 2) and scan["faces"] is not None,

@@ -7,6 +7,7 @@
 #include <tbs/types.h>
 
 #include <span>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,9 @@ struct CadExportOptions {
   /// fit report. ASCII as product_name.
   std::string description;
   StepSchema schema = StepSchema::AP214;
+  /// Called with a line of text at each stage (making faces, sewing, in steps of 10 %,
+  /// checking, translating, writing): large sets take minutes. Empty: silent.
+  std::function<void(const std::string&)> progress;
   TriangleFaces faces = TriangleFaces::Quads;
   /// Distance within which patch edges are sewn together; 0 means 1e-7 of the model size.
   double sewing_tolerance = 0;
@@ -64,8 +68,8 @@ struct CadExportReport {
 /// \throw InvalidInput if options.units is not mm, cm, m, um, in or ft ("unitless" included),
 ///   the set has no patches or a degree below 1, or a control point is not finite;
 ///   Error (the base class) if OpenCASCADE cannot make a face, cannot translate the shape or
-///   throws, or the sewn shape fails BRepCheck_Analyzer (nothing is written then; these
-///   messages do not name the file); IoError if the file cannot be written.
+///   throws, or the sewn shape fails BRepCheck_Analyzer (nothing is written then; the
+///   message starts with `path: `); IoError if the file cannot be written.
 CadExportReport write_step(const std::string& path, const TrianglePatchSet& patches,
                            const CadExportOptions& options = {});
 

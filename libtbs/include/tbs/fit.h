@@ -150,9 +150,11 @@ void check_fit_memory(const std::string& name, size_t points, const FitOptions& 
 /// Fits one DMS spline to a scan that has parameters.
 /// \throw InvalidInput if options are out of range, the scan needs more memory than
 ///        options.max_memory, has no parameters, fewer than 3 points, sizes that differ, a
-///        non-finite value, a triangle index out of range, all points identical, degenerate or
-///        folded parameters, or normals that cannot be estimated;
-///        SolverError if the sparse solve fails; Cancelled if options.stop was requested.
+///        non-finite value or one above 1e30 in magnitude, a normal that is not of unit length,
+///        a triangle index out of range, all points identical, degenerate, sliver (area below
+///        1e-5 of the extent squared) or folded parameters, or normals that cannot be estimated;
+///        SolverError `<source>: <problem>` if the sparse solve fails; Cancelled if options.stop
+///        was requested.
 ///        Whatever options.progress throws passes through.
 FitResult fit(const Scan& scan, const FitOptions& options);
 

@@ -45,8 +45,8 @@ SplineFile read_tbs(const std::string& path, const ReadOptions& options = {});
 std::string format_tbs(const SplineFile& file);
 
 /// Writes a .tbs file atomically (see AtomicOutput).
-/// \throw InvalidInput as format_tbs(), before any file is touched; IoError if the file cannot
-///   be written.
+/// \throw InvalidInput as format_tbs(), prefixed with `path: `, before any file is touched;
+///   IoError if the file cannot be written.
 void write_tbs(const std::string& path, const SplineFile& file);
 
 /// An output file that appears only when complete: data goes to a temporary file in the same

@@ -105,11 +105,12 @@ struct ParameterizedScan {
 ///   surface (with cut_closed); if the component does not exist; if the scan has fewer than 3
 ///   points, a point cloud's points are identical or collinear, or the reconstruction or the
 ///   repair leaves no triangle; if LSCM folds with FlattenMethod::Lscm; or if no method gives a
-///   bijective map (some of these flattening messages do not name the scan).
-/// \throw SolverError if the LSCM or mean-value system cannot be solved (FlattenMethod::Auto
-///   does not fall back then). Whatever options.progress throws passes through.
-/// \pre positions finite, triangle indices in range, normals empty or one per position (not
-///   checked).
+///   bijective map (some of these flattening messages do not name the scan); if a position
+///   is not finite or above 1e30 in magnitude, a normal is not finite or zero, the normals are
+///   neither empty nor one per position, or a triangle index is out of range.
+/// \throw SolverError if the mean-value system cannot be solved, or LSCM's with
+///   FlattenMethod::Lscm (FlattenMethod::Auto falls back to mean value, and says why in
+///   ParameterizeReport::fallback_reason). Whatever options.progress throws passes through.
 ParameterizedScan parameterize_scan(const Scan& scan, const ParameterizeOptions& options = {});
 
 }  // namespace tbs
