@@ -419,6 +419,26 @@ int run_fit(const FitCommandOptions& given) {
   std::error_code ec;
   if (fs::exists(o.output, ec) && fs::exists(o.input, ec) && fs::equivalent(o.input, o.output, ec))
     throw InvalidInput(o.output + ": the output would overwrite the input; choose another -o path");
+  // -o is the spline (.tbs, JSON); a CAD or mesh name there is a slip for --export.
+  {
+    std::string ext = fs::path(o.output).extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    bool export_name = false;
+    try {
+      convert_format(o.output);
+      export_name = true;
+    } catch (const InvalidInput&) {
+    }
+    if (export_name) {
+      std::fprintf(stderr, "tbs: error: %s: -o writes the fitted spline (.tbs); to write %s too, give -o NAME.tbs --export %s\n",
+                   o.output.c_str(), ext.c_str(), o.output.c_str());
+      return kUsage;
+    }
+  }
+  // Outputs checked before the work, not after it.
+  check_output_path(o.output);
+  if (!o.report.empty()) check_output_path(o.report);
+  for (const std::string& e : o.exports) check_output_path(e);
   for (const std::string& e : o.exports) {
     try {
       convert_format(e);
@@ -436,9 +456,9 @@ int run_fit(const FitCommandOptions& given) {
   const Scan scan = read_scan(o.input, {.max_points = o.max_points, .limit_name = "--max-points"});
   // Refused before parameterization and fitting; fit() checks again (subdivided meshes grow).
   check_fit_memory(o.input, scan.positions.size(), o.fit);
-  if (scan.degenerate_faces && !scan.has_faces())
-    say("tbs fit: every face of " + o.input + " is degenerate (fewer than three distinct corners); its points are "
-        "fitted as a point cloud");
+  if (scan.degenerate_faces && !scan.has_faces() && !o.quiet)  // a note, not a progress line
+    std::fprintf(stderr, "tbs fit: every face of %s is degenerate (fewer than three distinct corners); its points "
+                 "are fitted as a point cloud\n", o.input.c_str());
   if (scan.has_uv()) {
     if (o.component > 0 || o.all_components)
       say("tbs fit: the scan has parameters (u, v); --component and --all-components apply only to scans without them");

@@ -170,6 +170,7 @@ int run_convert(const ConvertOptions& o) {
   auto say = [&](const std::string& line) {
     if (!o.quiet) std::fprintf(stderr, "tbs convert: %s\n", line.c_str());
   };
+  check_output_path(o.output);  // before the work, not after it
   const SplineFile file = read_tbs(o.input);
   const Spline& s = file.spline;
 

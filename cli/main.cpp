@@ -6,12 +6,14 @@
 #include <tbs/io.h>
 
 #include <CLI/CLI.hpp>
+#include <tbb/global_control.h>
 
 #include <cctype>
 #include <cstdio>
 #include <string>
 #include <exception>
 #include <iostream>
+#include <optional>
 
 namespace {
 std::string lower_ascii(std::string s) {
@@ -62,7 +64,7 @@ int main(int argc, char** argv) {
              "open if closed, and flattened first (docs/fit.md). Prints a summary table on stdout, "
              "progress on stderr.");
   fit_cmd->add_option("input", fit.input, "The scan")->required();
-  fit_cmd->add_option("-o,--output", fit.output, "The .tbs file to write")->required();
+  fit_cmd->add_option("-o,--output", fit.output, "The .tbs file to write (CAD and mesh files: --export)")->required();
   fit_cmd->add_option("--degree", fit.fit.degree, "Polynomial degree n (C^(n-1) where smooth)")
       ->check(CLI::Range(1, 8))->capture_default_str();
   fit_cmd->add_option("--tolerance", fit.fit.tolerance,
@@ -216,6 +218,12 @@ int main(int argc, char** argv) {
     const int code = app.exit(e);
     return code == 0 ? kOk : kUsage;
   }
+
+  // --threads bounds every parallel loop, also those inside CGAL and TBB-parallel helpers that
+  // take no thread count (normal estimation, point-cloud meshing).
+  const int threads = *eval_cmd ? eval.threads : *fit_cmd ? fit.fit.threads : *convert_cmd ? convert.threads : 0;
+  std::optional<tbb::global_control> limit;
+  if (threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
 
   try {
     if (*info_cmd) return run_info(info);

@@ -218,7 +218,7 @@ tbs::Scan scan_from(const Array& points, const std::optional<Array>& uv, const s
     for (py::ssize_t i = 0; i < a.shape(0); ++i) {
       // Normalised here (fit() wants unit normals); a zero normal stays and is refused there.
       const tbs::Vector3 n(r(i, 0), r(i, 1), r(i, 2));
-      s.normals.push_back(n.norm() > 0 ? tbs::Vector3(n.normalized()) : n);
+      s.normals.push_back(n.stableNorm() > 0 ? tbs::Vector3(n.stableNormalized()) : n);
     }
   }
   if (faces) {

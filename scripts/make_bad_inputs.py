@@ -23,15 +23,18 @@ out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(here, "..", "tests", "d
 cases = []
 
 
-def case(name, data, expect, command="fit", what="", stdout=None):
+def case(name, data, expect, command="fit", what="", stdout=None, not_stdout=None):
     """One file NAME with DATA (bytes or str); tbs COMMAND on it must exit with EXPECT. A case
-    that tbs repairs (EXPECT 0) names the line its summary must print (STDOUT)."""
+    that tbs repairs (EXPECT 0) names the line its summary must print (STDOUT) and, if given,
+    text it must not print (NOT_STDOUT)."""
     path = os.path.join(out, name)
     with open(path, "wb") as f:
         f.write(data.encode() if isinstance(data, str) else data)
     c = {"file": name, "command": command, "exit": expect, "what": what}
     if stdout is not None:
         c["stdout"] = stdout
+    if not_stdout is not None:
+        c["not_stdout"] = not_stdout
     cases.append(c)
 
 
@@ -209,9 +212,12 @@ case("obj_some_degenerate_faces.obj", obj(sheet, sheet_faces + [(0, 0, 1), (5, 5
 case("ply_only_two_corner_faces.ply", ply_ascii([c[:3] for c in cloud], faces=[(0, 1), (2, 3)]), 0,
      what="only faces with two corners (fitted as a point cloud)", stdout="parameterized      point cloud")
 case("xyz_duplicate_points.xyz", xyz(cloud + cloud), 0, what="every point with (u, v) twice",
-     stdout="points             600")
+     stdout="points             600", not_stdout="points left out")
 case("xyz_duplicate_points_no_uv.xyz", xyz([c[:3] for c in cloud] * 2), 0, what="every point twice, no (u, v)",
-     stdout="points             600")
+     stdout="points             600", not_stdout="points left out")
+case("stl_nan_padded.stl", b"\0" * 80 + struct.pack("<I", 1) +
+     struct.pack("<12f", 0, 0, 1, 0, 0, 0, 0, float("nan"), 0, 0, 1, 0) + b"\0\0" + b"\0" * 7, 3,
+     what="binary, NaN corner, 7 bytes of padding after the last facet")
 # Paths
 case("unknown.foo", "0 0 0\n1 0 0\n0 1 0\n", 3, what="unknown extension")
 

@@ -40,6 +40,7 @@
 #include <TopoDS_Shape.hxx>
 
 #include <chrono>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -86,22 +87,33 @@ Handle(Geom_BSplineSurface) bspline(std::span<const Point3> cps, int m) {
   return new Geom_BSplineSurface(poles, knots, knots, mults, mults, m, m);
 }
 
-// OCCT's progress (sewing) as lines "<what>: N %", every 10 %.
+// OCCT's progress (sewing) as lines "<what>: N %", every 10 %. An exception from the callback
+// must not unwind through OCCT (its scopes report again while unwinding): it is kept, the
+// operation is asked to stop (UserBreak), and rethrow() raises it afterwards.
 class SayProgress : public Message_ProgressIndicator {
  public:
-  SayProgress(const std::function<void(const std::string&)>& say, std::string what)
-      : say_(say), what_(std::move(what)) {}
+  SayProgress(std::function<void(const std::string&)> say, std::string what)
+      : say_(std::move(say)), what_(std::move(what)) {}
   void Show(const Message_ProgressScope&, const Standard_Boolean) override {
     const int percent = static_cast<int>(GetPosition() * 100);
-    if (percent < next_) return;
+    if (percent < next_ || error_) return;
     next_ = percent / 10 * 10 + 10;
-    say_(what_ + ": " + std::to_string(percent / 10 * 10) + " %");
+    try {
+      say_(what_ + ": " + std::to_string(percent / 10 * 10) + " %");
+    } catch (...) {
+      error_ = std::current_exception();
+    }
+  }
+  Standard_Boolean UserBreak() override { return error_ != nullptr; }
+  void rethrow() const {
+    if (error_) std::rethrow_exception(error_);
   }
 
  private:
-  const std::function<void(const std::string&)>& say_;
+  std::function<void(const std::string&)> say_;
   std::string what_;
   int next_ = 10;
+  std::exception_ptr error_;
 };
 
 struct Built {
@@ -146,6 +158,7 @@ Built build_shape(const TrianglePatchSet& ps, const CadExportOptions& o) {
   if (o.progress) {
     Handle(SayProgress) indicator = new SayProgress(o.progress, "sewing");
     sewing.Perform(indicator->Start());
+    indicator->rethrow();
   } else {
     sewing.Perform();
   }
@@ -249,7 +262,7 @@ CadExportReport write_step(const std::string& path, const TrianglePatchSet& ps, 
     step.SendModel(protocol);
     std::ofstream os(temp, std::ios::binary | std::ios::trunc);
     const bool printed = os && step.Print(os);
-    os.flush();
+    os.close();
     if (!printed || !os) throw IoError(path + ": could not write the STEP file (disk full or no permission?)");
   });
 }
@@ -280,7 +293,7 @@ CadExportReport write_iges(const std::string& path, const TrianglePatchSet& ps, 
     if (o.progress) o.progress("writing the IGES file");
     std::ofstream os(temp, std::ios::binary | std::ios::trunc);
     const bool printed = os && writer.Write(os);
-    os.flush();
+    os.close();
     if (!printed || !os) throw IoError(path + ": could not write the IGES file (disk full or no permission?)");
   });
 }

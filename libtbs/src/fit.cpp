@@ -10,6 +10,7 @@
 #include "fit_solve.h"
 
 #include <nlohmann/json.hpp>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
@@ -272,7 +273,12 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
     } else if (opt.fairness > 0 && N >= kMinPointsForNormals) {
       progress("normals", "estimating normals of " + std::to_string(N) + " points", 0);
       try {
-        normals = estimate_normals(scan.positions, scan.uv, scan.triangles);
+        // Inside an arena of opt.threads: the estimate is a plain TBB loop.
+        if (opt.threads > 0)
+          tbb::task_arena(opt.threads).execute(
+              [&] { normals = estimate_normals(scan.positions, scan.uv, scan.triangles); });
+        else
+          normals = estimate_normals(scan.positions, scan.uv, scan.triangles);
       } catch (const InvalidInput& e) {
         throw InvalidInput(name + ": cannot estimate normals (" + e.what() +
                            "); give normals in the input, or turn the fairness term off (--fairness 0)");

@@ -283,8 +283,6 @@ size_t keep_largest_component(Region& r, std::span<const Point2> uv) {
   return dropped;
 }
 
-// Bare parameters: Delaunay triangulation, minus triangles much larger than the local point
-// spacing (an alpha shape), so concave outlines and holes of the data are kept.
 // Marks as not excluded every point whose (u, v) equals that of a point that is not.
 void include_duplicates(std::span<const Point2> uv, std::vector<char>& excluded) {
   std::vector<int> order(uv.size());
@@ -301,6 +299,8 @@ void include_duplicates(std::span<const Point2> uv, std::vector<char>& excluded)
   }
 }
 
+// Bare parameters: Delaunay triangulation, minus triangles much larger than the local point
+// spacing (an alpha shape), so concave outlines and holes of the data are kept.
 Region region_from_points(std::span<const Point2> uv) {
   std::vector<std::pair<CPoint, int>> pts;
   pts.reserve(uv.size());

@@ -431,13 +431,27 @@ void remove_outputs_on_signal() {
   });
 }
 
+void check_output_path(const std::string& path) {
+  namespace fs = std::filesystem;
+  const fs::path p(path);
+  if (p.filename().empty()) throw IoError("cannot write '" + path + "': not a file name");
+  std::error_code ec;
+  const fs::file_status st = fs::status(p, ec);  // follows symbolic links
+  if (fs::is_directory(st)) throw IoError("cannot write '" + path + "': it is a directory");
+  // The rename would replace a device or a pipe (e.g. /dev/stdout) by a regular file.
+  if (fs::exists(st) && !fs::is_regular_file(st))
+    throw IoError("cannot write '" + path + "': it exists and is not a regular file (a device, pipe or socket); "
+                  "give the path of a file");
+  const fs::path folder = p.parent_path().empty() ? fs::path(".") : p.parent_path();
+  if (!fs::is_directory(folder, ec))
+    throw IoError("cannot write '" + path + "': the folder '" + folder.string() + "' does not exist");
+}
+
 AtomicOutput::AtomicOutput(std::string path) : path_(std::move(path)) {
   static std::atomic<unsigned> counter{0};
   namespace fs = std::filesystem;
   const fs::path p(path_);
-  if (p.filename().empty()) throw IoError("cannot write '" + path_ + "': not a file name");
-  std::error_code ec;
-  if (fs::is_directory(p, ec)) throw IoError("cannot write '" + path_ + "': it is a directory");
+  check_output_path(path_);
   for (int attempt = 0; attempt < 100; ++attempt) {
     const std::string candidate = (p.parent_path() / ("." + p.filename().string() + ".tmp-" +
                                                       std::to_string(::getpid()) + "-" +

@@ -699,7 +699,7 @@ ParameterizedScan parameterize_scan(const Scan& scan, const ParameterizeOptions&
     throw InvalidInput(name + ": " + std::to_string(scan.normals.size()) + " normals for " +
                        std::to_string(scan.positions.size()) + " points; give one per point or none");
   for (size_t i = 0; i < scan.normals.size(); ++i)
-    if (!scan.normals[i].allFinite() || !(scan.normals[i].norm() > 0))
+    if (!scan.normals[i].allFinite() || !(scan.normals[i].stableNorm() > 0))
       throw InvalidInput(name + ": normal " + std::to_string(i) + " is not a finite, non-zero vector");
   for (size_t f = 0; f < scan.triangles.size(); ++f)
     for (int v : scan.triangles[f])
@@ -831,7 +831,7 @@ ParameterizedScan parameterize_scan(const Scan& scan, const ParameterizeOptions&
       out.source.push_back(src);
       s.positions.push_back(part.points[v]);
       s.uv.emplace_back(uv[v].x(), uv[v].y());
-      if (scan.has_normals()) s.normals.push_back(scan.normals[src]);
+      if (scan.has_normals()) s.normals.push_back(scan.normals[src].stableNormalized());
     }
     s.triangles = part.faces;
   } else {
@@ -868,7 +868,7 @@ ParameterizedScan parameterize_scan(const Scan& scan, const ParameterizeOptions&
       s.positions.push_back(p);
       s.uv.emplace_back(a.x() + l[0] * (b.x() - a.x()) + l[1] * (c.x() - a.x()),
                         a.y() + l[0] * (b.y() - a.y()) + l[1] * (c.y() - a.y()));
-      if (scan.has_normals()) s.normals.push_back(scan.normals[i]);
+      if (scan.has_normals()) s.normals.push_back(scan.normals[i].stableNormalized());
       out.source.push_back(i);
       ++rep.points_projected;
     }

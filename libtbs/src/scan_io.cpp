@@ -841,9 +841,9 @@ Scan read_stl(const Ctx& c) {
   }
 
   // CGAL merges corners through an ordered map of positions, which a NaN corrupts (the facet
-  // vanishes without an error). Binary facets are checked here first; an ASCII file never
-  // matches a non-finite float (that needs a byte of 0x80 or more).
-  if (binary_layout) {
+  // vanishes without an error). Binary facets are checked here first; an ASCII file of binary
+  // layout never matches a non-finite float (that needs a byte of 0x80 or more).
+  if (full_head && (binary_layout || !ascii)) {  // what CGAL reads as binary (it ignores extra bytes)
     is.clear();
     is.seekg(84);
     char rec[50];
@@ -1068,7 +1068,6 @@ Scan read_obj(const Ctx& c) {
                                     static_cast<int>(corners[j + 1])});
         else
           ++c.dropped;
-      if (corners.size() < 3) ++c.dropped;
     }
   }
 

@@ -69,6 +69,8 @@ for c in cases:
             problems.append("%d lines on stderr" % len(lines))
         if not said:
             problems.append("the summary lacks '%s'" % c["stdout"])
+        if c.get("not_stdout") and c["not_stdout"] in r.stdout:
+            problems.append("the summary says '%s'" % c["not_stdout"])
         if left != ["out.tbs"]:
             problems.append("files written: %s, expected out.tbs" % left)
         message = said[0] if said else "(no summary line)"

@@ -626,11 +626,30 @@ TEST(CliFit, ExportsInTheSameCall) {
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("f.dxf: unknown output format"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "f.tbs"));
-  // Nor may an export overwrite the fit's own output.
-  r = run("fit '" + scan + "' -o '" + (dir / "h.glb").string() + "' --export '" + (dir / "h.glb").string() + "'");
+  // Nor may an export overwrite the scan (a copy here).
+  const std::string copy = (dir / "copy.ply").string();
+  fs::copy_file(scan, copy, fs::copy_options::overwrite_existing);
+  const std::string before = read_file(copy);
+  r = run("fit '" + copy + "' -o '" + (dir / "h.tbs").string() + "' --export '" + copy + "'");
   EXPECT_EQ(r.code, 3);
   EXPECT_NE(r.err.find("would overwrite the scan or the .tbs"), std::string::npos) << r.err;
-  EXPECT_FALSE(fs::exists(dir / "h.glb"));
+  EXPECT_FALSE(fs::exists(dir / "h.tbs"));
+  EXPECT_EQ(read_file(copy), before);
+  // -o is the .tbs: a CAD or mesh name there is a usage error that points to --export.
+  r = run("fit '" + scan + "' -o '" + (dir / "h.step").string() + "'");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("-o writes the fitted spline (.tbs); to write .step too, give -o NAME.tbs --export"),
+            std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "h.step"));
+  // Outputs are checked before the fit: a missing folder, a device.
+  r = run("fit '" + scan + "' -o '" + (dir / "no" / "h.tbs").string() + "' -q");
+  EXPECT_EQ(r.code, 4);
+  EXPECT_NE(r.err.find("the folder"), std::string::npos) << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;  // refused before fitting: no summary
+  r = run("fit '" + scan + "' -o '" + (dir / "h.tbs").string() + "' --report /dev/null -q");
+  EXPECT_EQ(r.code, 4);
+  EXPECT_NE(r.err.find("'/dev/null': it exists and is not a regular file"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists("/dev/null") && !fs::is_regular_file("/dev/null"));
 }
 
 // Linux file names are bytes: not UTF-8, quotes and backslashes must still give valid files

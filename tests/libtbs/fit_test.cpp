@@ -116,6 +116,32 @@ TEST(Fit, NonFiniteDataAndBadTrianglesAreRefused) {
   FitOptions o;
   o.degree = 9;
   EXPECT_THROW(fit(random_scan([](double u, double v) { return Point3(u, v, 0); }, 100, 3), o), InvalidInput);
+  // Huge values and normals that are not unit vectors, each named by its point.
+  auto message = [](const Scan& bad) {
+    try {
+      fit(bad, {});
+    } catch (const InvalidInput& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  const Scan good = random_scan([](double u, double v) { return Point3(u, v, 0); }, 100, 3);
+  s = good;
+  s.positions[8].x() = 1e31;
+  EXPECT_NE(message(s).find("synthetic: point 8 has a coordinate or parameter larger than 1e30"), std::string::npos)
+      << message(s);
+  s = good;
+  s.uv[9].y() = -1e31;
+  EXPECT_NE(message(s).find("point 9 has a coordinate or parameter larger than 1e30"), std::string::npos)
+      << message(s);
+  s = good;
+  s.normals.assign(s.positions.size(), Vector3(0, 0, 1));
+  s.normals[11] = Vector3(0, 0, 2);
+  EXPECT_NE(message(s).find("normal 11 has length 2"), std::string::npos) << message(s);
+  s.normals[11] = Vector3::Zero();
+  EXPECT_NE(message(s).find("normal 11 has length 0"), std::string::npos) << message(s);
+  s.normals[11] = Vector3(0, 0, 1);
+  EXPECT_EQ(message(s), "(accepted)");
 }
 
 // A far-away cluster of parameters is not part of the region: left out and reported.

@@ -48,7 +48,9 @@ struct CadExportOptions {
   std::string description;
   StepSchema schema = StepSchema::AP214;
   /// Called with a line of text at each stage (making faces, sewing, in steps of 10 %,
-  /// checking, translating, writing): large sets take minutes. Empty: silent.
+  /// checking, translating, writing): large sets take minutes. Empty: silent. An exception
+  /// it throws stops the export and passes through write_step()/write_iges(); nothing is
+  /// written then.
   std::function<void(const std::string&)> progress;
   TriangleFaces faces = TriangleFaces::Quads;
   /// Distance within which patch edges are sewn together; 0 means 1e-7 of the model size.

@@ -49,13 +49,18 @@ std::string format_tbs(const SplineFile& file);
 ///   IoError if the file cannot be written.
 void write_tbs(const std::string& path, const SplineFile& file);
 
+/// Checks, without creating anything, what AtomicOutput checks before it writes `path`: that
+/// it names a file (not a directory, nor an existing device, pipe or socket) in a folder that
+/// exists. For checking outputs before long work.
+/// \throw IoError `cannot write '<path>': <why>`.
+void check_output_path(const std::string& path);
+
 /// An output file that appears only when complete: data goes to a temporary file in the same
 /// folder, commit() renames it over `path`; destruction without commit() removes it, so a
 /// failed or interrupted run never leaves a partial file nor replaces a good one.
 class AtomicOutput {
  public:
-  /// \throw IoError if path has no file name, is a directory, or the temporary file cannot be
-  ///   created.
+  /// \throw IoError as check_output_path(), or if the temporary file cannot be created.
   explicit AtomicOutput(std::string path);
   ~AtomicOutput();
   AtomicOutput(const AtomicOutput&) = delete;
@@ -89,11 +94,6 @@ void remove_pending_outputs() noexcept;
 /// Writes `data` to `path` through an AtomicOutput.
 /// \throw IoError if the temporary file cannot be created, written or renamed.
 void write_file_atomic(const std::string& path, std::string_view data);
-
-/// `text` with every byte sequence that is not valid UTF-8 replaced by U+FFFD. File names on
-/// Linux are bytes; names written into JSON (.tbs metadata, reports, glTF) must be UTF-8.
-/// \throw nothing but std::bad_alloc.
-std::string valid_utf8(std::string_view text);
 
 /// `text` with every byte sequence that is not valid UTF-8 replaced by U+FFFD. File names on
 /// Linux are bytes; names written into JSON (.tbs metadata, reports, glTF) must be UTF-8.

@@ -99,7 +99,7 @@ struct ParameterizedScan {
 };
 
 /// Computes parameters for a scan without them: a mesh (scan.triangles non-empty) or a point
-/// cloud. Normals of the input are carried to the output.
+/// cloud. Normals of the input are carried to the output, normalised.
 /// \throw InvalidInput naming the scan and what was found (components, boundary loops,
 ///   genus) if the chosen component is not a disk, possibly with holes, or a closed genus-0
 ///   surface (with cut_closed); if the component does not exist; if the scan has fewer than 3

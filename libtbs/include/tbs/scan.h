@@ -21,7 +21,8 @@ struct Scan {
   std::vector<std::array<int, 3>> triangles;  ///< empty for bare points; indices into positions
   std::string source;                         ///< the path it was read from
   /// Faces the reader left out: polygons with fewer than three corners, and triangles (of a
-  /// polygon's fan) with a repeated corner.
+  /// polygon's fan) with a repeated corner. (In OBJ, tinyobjloader drops faces with fewer than
+  /// three corners itself: they are not counted.)
   std::size_t degenerate_faces = 0;
   bool has_normals() const { return !normals.empty(); }
   bool has_uv() const { return !uv.empty(); }
