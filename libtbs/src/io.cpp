@@ -450,8 +450,15 @@ void check_output_path(const std::string& path) {
 AtomicOutput::AtomicOutput(std::string path) : path_(std::move(path)) {
   static std::atomic<unsigned> counter{0};
   namespace fs = std::filesystem;
-  const fs::path p(path_);
   check_output_path(path_);
+  // A symbolic link is written through: the rename replaces its target, and the link stays.
+  std::error_code link_ec;
+  fs::path p(path_);
+  if (fs::is_symlink(p, link_ec)) {
+    const fs::path target = fs::weakly_canonical(p, link_ec);
+    if (!link_ec) p = target;
+  }
+  target_ = p.string();
   for (int attempt = 0; attempt < 100; ++attempt) {
     const std::string candidate = (p.parent_path() / ("." + p.filename().string() + ".tmp-" +
                                                       std::to_string(::getpid()) + "-" +
@@ -482,7 +489,7 @@ AtomicOutput::~AtomicOutput() {
 }
 
 void AtomicOutput::commit() {
-  if (std::rename(temp_.c_str(), path_.c_str()) != 0)
+  if (std::rename(temp_.c_str(), target_.c_str()) != 0)
     throw IoError("cannot write '" + path_ + "': " + std::strerror(errno));
   committed_ = true;
   unregister_temp(slot_);

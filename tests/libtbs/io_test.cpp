@@ -99,6 +99,27 @@ TEST(Io, AtomicOutputLeavesNothingBehindOnFailure) {
   EXPECT_THROW(write_file_atomic(dir.string(), "x"), IoError);
 }
 
+// A symbolic link is written through: its target gets the data, the link stays a link, and no
+// temporary file is left beside either.
+TEST(Io, AtomicOutputWritesThroughASymbolicLink) {
+  const fs::path dir = temp_dir() / "link";
+  fs::remove_all(dir);
+  fs::create_directories(dir / "shared");
+  const fs::path real = dir / "shared" / "x.tbs", link = dir / "x.tbs";
+  write_file_atomic(real.string(), "old");
+  fs::create_symlink(fs::path("shared") / "x.tbs", link);
+  write_file_atomic(link.string(), "new");
+  EXPECT_TRUE(fs::is_symlink(link));
+  EXPECT_EQ(read_file(real.string()), "new");
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 2);  // shared/, x.tbs
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir / "shared"), fs::directory_iterator()), 1);
+  // A link to a device is refused, as the device is.
+  const fs::path to_null = dir / "null.tbs";
+  fs::create_symlink("/dev/null", to_null);
+  EXPECT_THROW(write_file_atomic(to_null.string(), "x"), IoError);
+  EXPECT_TRUE(fs::is_symlink(to_null));
+}
+
 // A process killed while writing leaves the earlier file as it was and no temporary file.
 TEST(Io, SignalsRemoveTemporaryFiles) {
   for (int sig : {SIGINT, SIGTERM, SIGHUP}) {

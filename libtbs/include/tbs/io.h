@@ -57,7 +57,9 @@ void check_output_path(const std::string& path);
 
 /// An output file that appears only when complete: data goes to a temporary file in the same
 /// folder, commit() renames it over `path`; destruction without commit() removes it, so a
-/// failed or interrupted run never leaves a partial file nor replaces a good one.
+/// failed or interrupted run never leaves a partial file nor replaces a good one. If `path` is
+/// a symbolic link, its target is written (the temporary file goes beside the target) and the
+/// link stays.
 class AtomicOutput {
  public:
   /// \throw IoError as check_output_path(), or if the temporary file cannot be created.
@@ -74,7 +76,8 @@ class AtomicOutput {
   void commit();
 
  private:
-  std::string path_;
+  std::string path_;    // as given, for messages
+  std::string target_;  // what commit() replaces: path_, or the file a symbolic link points to
   std::string temp_;
   int slot_ = -1;  // in the registry remove_pending_outputs() reads; -1 if not registered
   bool committed_ = false;
