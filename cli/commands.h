@@ -66,9 +66,12 @@ struct ConvertOptions {
   std::string input;
   std::string output;
   std::string format;        // empty: from the output's extension
-  bool exact = false;        // the exact Bezier pieces instead of compact patches
-  int patch_degree = 0;      // 0: spline degree + 2
-  double cad_tolerance = 1e-6;
+  std::string faces = "regions";  // CAD: regions, triangles or exact
+  bool exact = false;        // --exact: the same as --faces exact
+  int face_degree = 5;       // region faces: degree in u and v
+  long max_poles = 20'000;   // region faces: most poles per face
+  int patch_degree = 0;      // triangle patches: 0 for spline degree + 2
+  double cad_tolerance = 0;  // relative to the model size; 0: 1/20 of the fit's (or 1e-5)
   double angle_tolerance = 1.0;
   long max_patches = 50'000;
   std::string schema = "ap214";
@@ -85,6 +88,7 @@ struct ConvertOptions {
   std::string measure = "parameter";
   int resolution = 0;        // meshes: uniform resolution; 0 = adaptive
   double chordal_tolerance = 1e-4;
+  std::string report;        // --report: the conversion report as JSON (empty: none)
   int threads = 0;
   bool quiet = false;
 };

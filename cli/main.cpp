@@ -143,13 +143,14 @@ int main(int argc, char** argv) {
   ConvertOptions convert;
   auto* convert_cmd = app.add_subcommand(
       "convert", "Convert a .tbs spline to a CAD file: STEP (.step, .stp; AP214, or AP242 with "
-                 "--schema) or IGES 5.3 (.iges, .igs), as exact B-spline faces sewn into one "
-                 "shell and checked by OpenCASCADE before writing. By default the surface is "
-                 "written as compact Bezier patches within --cad-tolerance of the spline; "
-                 "--exact writes its exact polynomial pieces instead. Or a glTF 2.0 mesh (.glb, "
-                 ".gltf) with normals, (u, v) and domain-triangle ids, or OBJ / PLY. Or an error map of the "
-                 "scan (--points) as OpenEXR (.exr) with a PNG preview beside it. A summary "
-                 "goes to stdout.");
+                 "--schema) or IGES 5.3 (.iges, .igs), as B-spline faces in one shell with shared "
+                 "edges, checked by OpenCASCADE before writing. By default each smooth region of the "
+                 "surface (bounded by the boundary and the creases) becomes one trimmed B-spline face "
+                 "within the CAD tolerance of the spline; --faces triangles writes Bezier patches per "
+                 "domain triangle, --faces exact (or --exact) the exact polynomial pieces. Or a glTF 2.0 "
+                 "mesh (.glb, .gltf) with normals, (u, v) and domain-triangle ids, or OBJ / PLY. Or an "
+                 "error map of the scan (--points) as OpenEXR (.exr) with a PNG preview beside it. A "
+                 "summary goes to stdout.");
   convert_cmd->add_option("input", convert.input, "The .tbs file")->required();
   convert_cmd->add_option("output", convert.output, "The file to write (format from the extension)")->required();
   convert_cmd->add_option("--format", convert.format, "Output format, overriding the extension: step, iges, glb, gltf, obj, ply, exr")
@@ -178,27 +179,38 @@ int main(int argc, char** argv) {
                           "Meshes: largest distance between triangles and surface, relative to the "
                           "model size")
       ->check(CLI::PositiveNumber)->capture_default_str();
-  convert_cmd->add_flag("--exact", convert.exact,
-                        "Write the exact piecewise Bezier form (many more faces) instead of compact patches");
+  convert_cmd->add_option("--faces", convert.faces,
+                          "STEP/IGES surface form: regions (one trimmed B-spline face per smooth region), "
+                          "triangles (Bezier patches per domain triangle, split to the tolerance) or exact "
+                          "(the exact polynomial pieces, many more faces)")
+      ->check(CLI::IsMember({"regions", "triangles", "exact"}))->capture_default_str();
+  convert_cmd->add_flag("--exact", convert.exact, "The same as --faces exact");
+  convert_cmd->add_option("--face-degree", convert.face_degree, "Region faces: B-spline degree in u and v")
+      ->check(CLI::Range(2, 9))->capture_default_str();
+  convert_cmd->add_option("--max-poles", convert.max_poles,
+                          "Region faces: most poles of one face; a region that needs more is split along "
+                          "domain edges")
+      ->check(CLI::Range(16L, 10'000'000L))->capture_default_str();
   convert_cmd->add_option("--patch-degree", convert.patch_degree,
-                          "Degree of the compact patches (default: spline degree + 2; at least the spline degree)")
+                          "Triangle patches: degree (default: spline degree + 2; at least the spline degree)")
       ->check(CLI::Range(1, 15));
   convert_cmd->add_option("--cad-tolerance", convert.cad_tolerance,
-                          "Largest distance between patches and spline, relative to the model size "
-                          "(the diagonal of the control points' bounding box)")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+                          "Largest distance between the faces and the spline, relative to the model size "
+                          "(the diagonal of the control points' bounding box). Default: 1/20 of the fit's "
+                          "tolerance recorded in the .tbs, or 1e-5 when it records none")
+      ->check(CLI::PositiveNumber);
   convert_cmd->add_option("--angle-tolerance", convert.angle_tolerance,
-                          "Largest angle in degrees between the normals of patches meeting where the "
-                          "surface is smooth")
+                          "Largest angle in degrees between the normals of faces meeting where the "
+                          "surface is smooth (each face keeps within half of it of the spline)")
       ->check(CLI::Range(0.001, 89.0))->capture_default_str();
   convert_cmd->add_option("--max-patches", convert.max_patches,
-                          "Most compact patches: splitting stops there, with a warning if the "
+                          "Triangle patches: most patches; splitting stops there, with a warning if the "
                           "tolerances are not met (each patch is 3 B-spline faces with quads)")
       ->check(CLI::Range(1L, 10'000'000L))->capture_default_str();
   convert_cmd->add_option("--schema", convert.schema, "STEP schema: ap214 or ap242")
       ->check(CLI::IsMember({"ap214", "ap242"}, CLI::ignore_case))->capture_default_str();
   convert_cmd->add_option("--triangle-patch", convert.triangle_patch,
-                          "How a triangular patch becomes B-spline faces: quads (three, none degenerate) "
+                          "Triangle patches and exact pieces: how a triangle becomes B-spline faces: quads (three, none degenerate) "
                           "or degenerate (one, with a collapsed edge)")
       ->check(CLI::IsMember({"quads", "degenerate"}))->capture_default_str();
   convert_cmd->add_option("--units", convert.units,
@@ -208,6 +220,9 @@ int main(int argc, char** argv) {
   convert_cmd->add_option("--product-name", convert.product_name,
                           "Product name in the file (default: the output's file name); STEP and IGES get it in "
                           "ASCII, other characters as _");
+  convert_cmd->add_option("--report", convert.report,
+                          "Write a JSON report: faces, regions or patches, measured deviations, CAD "
+                          "tolerance and where it came from, seconds per stage, file size");
   convert_cmd->add_option("--threads,-t", convert.threads, "Worker threads (0 = all cores)")
       ->check(CLI::NonNegativeNumber);
   convert_cmd->add_flag("--quiet,-q", convert.quiet, "No progress messages on stderr");

@@ -1,10 +1,8 @@
 // The Python module `tbs` (pybind11): fit, evaluate, tessellate and export with NumPy arrays.
 // docs/python.md documents it; tests/python/ tests it in Debian's python3 and inside FreeCAD.
-#include <tbs/cad_export.h>
-#include <tbs/cad_patches.h>
+#include <tbs/convert.h>
 #include <tbs/errors.h>
 #include <tbs/evaluator.h>
-#include <tbs/extract.h>
 #include <tbs/fit.h>
 #include <tbs/io.h>
 #include <tbs/mesh_export.h>
@@ -28,12 +26,6 @@ namespace py = pybind11;
 namespace {
 
 using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
-
-std::string lower_extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext;
-}
 
 // An (N, k) array of doubles, checked.
 Array checked(const Array& a, py::ssize_t columns, const char* what) {
@@ -131,59 +123,46 @@ class PySpline {
     tbs::write_tbs(path, f);
   }
 
-  // STEP/IGES (compact patches or exact pieces) or a mesh (glb, gltf, obj, ply), by extension.
-  py::dict export_file(const std::string& path, double cad_tolerance, double angle_tolerance, int patch_degree,
-                       long max_patches, bool exact, const std::string& units, double chordal_tolerance) const {
-    const std::string ext = lower_extension(path);
-    py::dict d;
-    py::gil_scoped_release release;
-    if (ext == ".step" || ext == ".stp" || ext == ".iges" || ext == ".igs") {
-      tbs::TrianglePatchSet patches;
-      double deviation = 0, normal_deviation = 0;
-      bool within = true;
-      if (exact) {
-        patches = tbs::patch_set(tbs::extract_bezier(*spline_));
-      } else {
-        tbs::CadPatchOptions co;
-        co.tolerance = cad_tolerance;
-        co.angle_tolerance = angle_tolerance;
-        co.degree = patch_degree;
-        co.max_patches = max_patches;
-        const tbs::CadPatches c = tbs::make_cad_patches(*spline_, co);
-        patches = tbs::patch_set(c);
-        deviation = c.max_position_deviation;
-        normal_deviation = c.max_normal_deviation;
-        within = c.within_tolerance;
+  // Any format `tbs convert` writes, through the same tbs::convert(); returns its report.
+  py::dict export_file(const std::string& path, const std::string& faces, double cad_tolerance,
+                       double angle_tolerance, int face_degree, long max_poles, int patch_degree, long max_patches,
+                       bool exact, const std::string& units, double chordal_tolerance, int threads) const {
+    tbs::ConvertOptions o;
+    if (exact || faces == "exact") {
+      o.faces = tbs::CadFaceForm::Exact;
+    } else if (faces == "triangles") {
+      o.faces = tbs::CadFaceForm::Triangles;
+    } else if (faces != "regions") {
+      throw tbs::InvalidInput("faces must be 'regions', 'triangles' or 'exact', not '" + faces + "'");
+    }
+    o.cad_tolerance = cad_tolerance;
+    o.angle_tolerance = angle_tolerance;
+    o.face_degree = face_degree;
+    o.max_poles = max_poles;
+    o.patch_degree = patch_degree;
+    o.max_patches = max_patches;
+    o.units = units;
+    o.chordal_tolerance = chordal_tolerance;
+    o.threads = threads;
+    // A spline fitted here carries its fit report; convert() reads the fit's tolerance from
+    // the metadata as `tbs fit` writes it, under "fit".
+    std::string meta = report_.empty() ? "{}" : report_;
+    {
+      py::module_ json_module = py::module_::import("json");
+      py::object d = json_module.attr("loads")(meta);
+      if (py::isinstance<py::dict>(d) && !d.contains("fit") && d.contains("tolerance_abs")) {
+        py::dict wrapped;
+        wrapped["fit"] = d;
+        meta = json_module.attr("dumps")(wrapped).cast<std::string>();
       }
-      tbs::CadExportOptions eo;
-      eo.units = units.empty() ? (units_ == "unitless" || units_.empty() ? "mm" : units_) : units;
-      eo.product_name = std::filesystem::path(path).stem().string();
-      const auto r = ext == ".step" || ext == ".stp" ? tbs::write_step(path, patches, eo)
-                                                      : tbs::write_iges(path, patches, eo);
-      py::gil_scoped_acquire acquire;
-      d["patches"] = patches.size();
-      d["faces"] = r.faces;
-      d["shells"] = r.shells;
-      d["free_edges"] = r.free_edges;
-      d["max_deviation"] = deviation;
-      d["max_normal_deviation"] = normal_deviation;
-      d["within_tolerance"] = within;
-      return d;
     }
-    if (ext == ".glb" || ext == ".gltf" || ext == ".obj" || ext == ".ply") {
-      tbs::TessellateOptions o;
-      o.chordal_tolerance = chordal_tolerance;
-      const tbs::Mesh m = tbs::tessellate(*spline_, o);
-      const auto r = ext == ".glb" || ext == ".gltf"
-                         ? tbs::write_gltf(path, m, spline_->domain().bounding_box())
-                         : tbs::write_mesh_soup(path, m);
-      py::gil_scoped_acquire acquire;
-      d["vertices"] = r.vertices;
-      d["faces"] = r.faces;
-      return d;
+    const tbs::SplineFile file{*spline_, units_.empty() ? "unitless" : units_, meta};
+    std::string json;
+    {
+      py::gil_scoped_release release;
+      json = tbs::to_json(tbs::convert(file, path, o));
     }
-    throw tbs::InvalidInput(path + ": unknown output format '" + ext +
-                            "' (step, stp, iges, igs, glb, gltf, obj, ply)");
+    return py::module_::import("json").attr("loads")(json);
   }
 
  private:
@@ -351,12 +330,16 @@ PYBIND11_MODULE(tbs, m) {
            "(F, 3) and max_chordal_deviation. Adaptive to chordal_tolerance (of the model size), "
            "or uniform with resolution > 0.")
       .def("save", &PySpline::save, py::arg("path"), "Writes a .tbs file (atomically).")
-      .def("export", &PySpline::export_file, py::arg("path"), py::arg("cad_tolerance") = 1e-6,
-           py::arg("angle_tolerance") = 1.0, py::arg("patch_degree") = 0, py::arg("max_patches") = 50000,
+      .def("export", &PySpline::export_file, py::arg("path"), py::arg("faces") = "regions",
+           py::arg("cad_tolerance") = 0.0, py::arg("angle_tolerance") = 1.0, py::arg("face_degree") = 5,
+           py::arg("max_poles") = 20000, py::arg("patch_degree") = 0, py::arg("max_patches") = 50000,
            py::arg("exact") = false, py::arg("units") = "", py::arg("chordal_tolerance") = 1e-4,
-           "Writes STEP/IGES (.step .stp .iges .igs: compact patches, or the exact pieces with "
-           "exact=True) or a mesh (.glb .gltf .obj .ply), as `tbs convert` does. Returns a dict "
-           "of what was written.");
+           py::arg("threads") = 0,
+           "Writes STEP/IGES (.step .stp .iges .igs: faces='regions', one trimmed B-spline face per "
+           "smooth region; 'triangles', Bezier patches per domain triangle; 'exact', the exact "
+           "pieces) or a mesh (.glb .gltf .obj .ply), through the same conversion as `tbs convert`, "
+           "with its defaults (cad_tolerance 0: 1/20 of the fit's tolerance). Returns the report "
+           "of `tbs convert --report` as a dict.");
 
   m.def("fit", &fit, py::arg("points"), py::arg("uv"), py::arg("normals") = py::none(),
         py::arg("faces") = py::none(), py::arg("degree") = 3,

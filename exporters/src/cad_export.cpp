@@ -1,17 +1,19 @@
 #include <tbs/bezier.h>
 #include <tbs/cad_export.h>
 #include <tbs/cad_patches.h>
+#include <tbs/cad_regions.h>
 #include <tbs/errors.h>
 #include <tbs/extract.h>
 #include <tbs/io.h>
+
+#include "cad_shapes.h"
 
 #include <APIHeaderSection_MakeHeader.hxx>
 #include <StepData_Protocol.hxx>
 #include <StepData_StepModel.hxx>
 #include <StepData_StepWriter.hxx>
 #include <XSControl_WorkSession.hxx>
-#include <BRepBuilderAPI_MakeFace.hxx>
-#include <BRepBuilderAPI_Sewing.hxx>
+#include <BRep_Tool.hxx>
 #include <BRepCheck_Analyzer.hxx>
 #include <Geom_BSplineSurface.hxx>
 #include <IGESControl_Controller.hxx>
@@ -23,8 +25,6 @@
 #include <Interface_Static.hxx>
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
-#include <Message_ProgressIndicator.hxx>
-#include <Message_ProgressScope.hxx>
 #include <STEPControl_Controller.hxx>
 #include <STEPControl_Writer.hxx>
 #include <ShapeAnalysis_FreeBounds.hxx>
@@ -34,7 +34,10 @@
 #include <TColgp_Array2OfPnt.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
+#include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
+#include <TopoDS_Edge.hxx>
+#include <TopoDS_Vertex.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Shape.hxx>
@@ -48,13 +51,6 @@
 #include <typeinfo>
 
 namespace tbs {
-
-size_t TrianglePatchSet::size() const {
-  return degree >= 0 ? control_points.size() / static_cast<size_t>(beta_count(degree)) : 0;
-}
-
-TrianglePatchSet patch_set(const CadPatches& p) { return {p.degree, p.control_points}; }
-TrianglePatchSet patch_set(const Extraction& x) { return {x.degree, x.control_points}; }
 
 namespace {
 
@@ -71,105 +67,11 @@ const char* occt_unit(const std::string& u) {
   return it->second;
 }
 
-Handle(Geom_BSplineSurface) bspline(std::span<const Point3> cps, int m) {
-  TColgp_Array2OfPnt poles(1, m + 1, 1, m + 1);
-  for (int j = 0; j <= m; ++j)
-    for (int i = 0; i <= m; ++i) {
-      const Point3& p = cps[static_cast<size_t>(i + (m + 1) * j)];
-      poles.SetValue(i + 1, j + 1, gp_Pnt(p.x(), p.y(), p.z()));
-    }
-  TColStd_Array1OfReal knots(1, 2);
-  knots.SetValue(1, 0.0);
-  knots.SetValue(2, 1.0);
-  TColStd_Array1OfInteger mults(1, 2);
-  mults.SetValue(1, m + 1);
-  mults.SetValue(2, m + 1);
-  return new Geom_BSplineSurface(poles, knots, knots, mults, mults, m, m);
-}
-
-// OCCT's progress (sewing) as lines "<what>: N %", every 10 %. An exception from the callback
-// must not unwind through OCCT (its scopes report again while unwinding): it is kept, the
-// operation is asked to stop (UserBreak), and rethrow() raises it afterwards.
-class SayProgress : public Message_ProgressIndicator {
- public:
-  SayProgress(std::function<void(const std::string&)> say, std::string what)
-      : say_(std::move(say)), what_(std::move(what)) {}
-  void Show(const Message_ProgressScope&, const Standard_Boolean) override {
-    const int percent = static_cast<int>(GetPosition() * 100);
-    if (percent < next_ || error_) return;
-    next_ = percent / 10 * 10 + 10;
-    try {
-      say_(what_ + ": " + std::to_string(percent / 10 * 10) + " %");
-    } catch (...) {
-      error_ = std::current_exception();
-    }
-  }
-  Standard_Boolean UserBreak() override { return error_ != nullptr; }
-  void rethrow() const {
-    if (error_) std::rethrow_exception(error_);
-  }
-
- private:
-  std::function<void(const std::string&)> say_;
-  std::string what_;
-  int next_ = 10;
-  std::exception_ptr error_;
-};
-
-struct Built {
-  TopoDS_Shape shape;
-  CadExportReport report;
-};
-
-Built build_shape(const TrianglePatchSet& ps, const CadExportOptions& o) {
-  const int m = ps.degree;
-  if (m < 1 || ps.size() == 0) throw InvalidInput("CAD export: there are no patches to write");
-  Box3 box;
-  for (const Point3& p : ps.control_points) {
-    if (!p.allFinite()) throw InvalidInput("CAD export: a control point is not finite");
-    box.extend(p);
-  }
-  const double size = std::max((box.max - box.min).norm(), 1e-300);
-  Built b;
-  b.report.sewing_tolerance = o.sewing_tolerance > 0 ? o.sewing_tolerance : 1e-7 * size;
-  BRepBuilderAPI_Sewing sewing(b.report.sewing_tolerance);
-  const size_t nb = static_cast<size_t>(beta_count(m));
-  auto say = [&](const std::string& line) {
-    if (o.progress) o.progress(line);
-  };
-  say("making the B-spline faces of " + std::to_string(ps.size()) + " patches");
-  for (size_t p = 0; p < ps.size(); ++p) {
-    const std::span<const Point3> net(ps.control_points.data() + p * nb, nb);
-    std::vector<std::vector<Point3>> quads;
-    if (o.faces == TriangleFaces::Quads) {
-      const auto q = bezier_triangle_to_quads(net, m);
-      quads.assign(q.begin(), q.end());
-    } else {
-      quads.push_back(bezier_triangle_to_collapsed_quad(net, m));
-    }
-    for (const auto& q : quads) {
-      BRepBuilderAPI_MakeFace face(bspline(q, m), Precision::Confusion());
-      if (!face.IsDone()) throw Error("CAD export: OpenCASCADE could not make a face of patch " + std::to_string(p));
-      sewing.Add(face.Face());
-      ++b.report.faces;
-    }
-  }
-  say("sewing " + std::to_string(b.report.faces) + " faces");
-  if (o.progress) {
-    Handle(SayProgress) indicator = new SayProgress(o.progress, "sewing");
-    sewing.Perform(indicator->Start());
-    indicator->rethrow();
-  } else {
-    sewing.Perform();
-  }
-  b.shape = sewing.SewedShape();
-  for (TopExp_Explorer e(b.shape, TopAbs_SHELL); e.More(); e.Next()) ++b.report.shells;
-  b.report.free_edges = static_cast<size_t>(sewing.NbFreeEdges());
-  say("checking the shape");
-  BRepCheck_Analyzer check(b.shape);
-  if (!check.IsValid())
-    throw Error("CAD export: the sewn shape is not valid for OpenCASCADE (BRepCheck_Analyzer); nothing was written");
-  return b;
+// Every coordinate of the shape's geometry must be finite.
+template <class Points>
+void check_finite(const Points& points, const char* what) {
+  for (const Point3& p : points)
+    if (!p.allFinite()) throw InvalidInput(std::string("CAD export: a ") + what + " is not finite");
 }
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -200,26 +102,70 @@ std::string ascii_name(const std::string& text) {
   return out;
 }
 
+// Counts of the written shape: shells, edges, free edges and their connected chains.
+void count_shape(const TopoDS_Shape& shape, CadExportReport& r) {
+  for (TopExp_Explorer e(shape, TopAbs_SHELL); e.More(); e.Next()) ++r.shells;
+  TopTools_IndexedDataMapOfShapeListOfShape faces_of;
+  TopExp::MapShapesAndAncestors(shape, TopAbs_EDGE, TopAbs_FACE, faces_of);
+  std::map<int, int> parent;  // union-find over vertex indices of free edges
+  TopTools_IndexedMapOfShape vertices;
+  auto find = [&](int v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  for (int i = 1; i <= faces_of.Extent(); ++i) {
+    const TopoDS_Edge& e = TopoDS::Edge(faces_of.FindKey(i));
+    if (BRep_Tool::Degenerated(e)) continue;
+    ++r.edges;
+    if (faces_of(i).Extent() != 1) continue;
+    ++r.free_edges;
+    TopoDS_Vertex a, b;
+    TopExp::Vertices(e, a, b);
+    const int ia = vertices.Add(a), ib = vertices.Add(b);
+    if (!parent.count(ia)) parent[ia] = ia;
+    if (!parent.count(ib)) parent[ib] = ib;
+    parent[find(ia)] = find(ib);
+  }
+  for (const auto& [v, up] : parent)
+    if (find(v) == v) ++r.free_loops;
+}
+
 // The steps every CAD writer shares: check the unit, take OCCT's process-wide settings for
-// this call, build and check the shape, let `write` translate it into the temporary file of
+// this call, build and check the shell, let `write` translate it into the temporary file of
 // an AtomicOutput, commit, and turn OCCT's exceptions into ours.
-template <class Write>
-CadExportReport export_shape(const char* format, const std::string& path, const TrianglePatchSet& ps,
-                             const CadExportOptions& o, Write&& write) {
+template <class Build, class Write>
+CadExportReport export_shape(const char* format, const std::string& path, const CadExportOptions& o, Build&& build,
+                             Write&& write) {
   const auto t0 = std::chrono::steady_clock::now();
   const char* unit = occt_unit(o.units);
   std::lock_guard lock(occt_mutex);
   quiet_occt();
+  auto say = [&](const std::string& line) {
+    if (o.progress) o.progress(line);
+  };
   try {
-    Built b = build_shape(ps, o);
+    CadExportReport r;
+    const detail::ShellResult shell = build();
+    r.faces = shell.faces;
+    r.max_edge_tolerance = shell.max_edge_tolerance;
+    r.build_seconds = seconds_since(t0);
+    say("checking the shape (" + std::to_string(r.faces) + " faces)");
+    const auto t1 = std::chrono::steady_clock::now();
+    BRepCheck_Analyzer check(shell.shell);
+    if (!check.IsValid())
+      throw Error("CAD export: the shape is not valid for OpenCASCADE (BRepCheck_Analyzer); nothing was written");
+    r.check_seconds = seconds_since(t1);
+    count_shape(shell.shell, r);
     // The coordinates are already in `unit`: OCCT's session unit is set to the same, so it
     // writes them unscaled.
     Interface_Static::SetCVal("xstep.cascade.unit", unit);
     AtomicOutput out(path);
-    write(b.shape, unit, out.temp_path());
+    write(shell.shell, unit, out.temp_path(), r);
+    std::error_code ec;
+    r.file_bytes = std::filesystem::file_size(out.temp_path(), ec);
     out.commit();
-    b.report.seconds = seconds_since(t0);
-    return b.report;
+    r.seconds = seconds_since(t0);
+    return r;
   } catch (const Standard_Failure& e) {
     throw Error(path + ": " + format + " export: OpenCASCADE failed: " + e.GetMessageString());
   } catch (const IoError&) {
@@ -231,10 +177,41 @@ CadExportReport export_shape(const char* format, const std::string& path, const 
   }
 }
 
+detail::ShellResult build(const CadRegions& r, const CadExportOptions& o) {
+  if (r.faces.empty()) throw InvalidInput("CAD export: there are no faces to write");
+  for (const RegionFace& f : r.faces) check_finite(f.surface.poles, "pole");
+  for (const RegionEdge& e : r.edges) check_finite(e.curve.poles, "curve pole");
+  if (o.progress) o.progress("building the shell of " + std::to_string(r.faces.size()) + " region faces");
+  return detail::region_shell(r);
+}
+
+detail::ShellResult build(const CadPatches& c, const CadExportOptions& o) {
+  if (c.degree < 1 || c.patches.empty()) throw InvalidInput("CAD export: there are no patches to write");
+  check_finite(c.control_points, "control point");
+  if (o.progress) o.progress("building the shell of " + std::to_string(c.patches.size()) + " patches");
+  return detail::patch_shell(c, o.faces);
+}
+
+detail::ShellResult build(const Extraction& x, const CadExportOptions& o) {
+  if (x.degree < 1 || x.pieces.empty()) throw InvalidInput("CAD export: there are no pieces to write");
+  check_finite(x.control_points, "control point");
+  if (o.progress) o.progress("building the shell of " + std::to_string(x.pieces.size()) + " exact pieces");
+  return detail::patch_shell(detail::patches_of(x), o.faces);
+}
+
+void write_step_file(const std::string& path, const TopoDS_Shape& shape, const char* unit, const std::string& temp,
+                     const CadExportOptions& o, CadExportReport& r);
+void write_iges_file(const std::string& path, const TopoDS_Shape& shape, const char* unit, const std::string& temp,
+                     const CadExportOptions& o, CadExportReport& r);
+
 }  // namespace
 
-CadExportReport write_step(const std::string& path, const TrianglePatchSet& ps, const CadExportOptions& o) {
-  return export_shape("STEP", path, ps, o, [&](const TopoDS_Shape& shape, const char* unit, const std::string& temp) {
+namespace {
+
+void write_step_file(const std::string& path, const TopoDS_Shape& shape, const char* unit, const std::string& temp,
+                     const CadExportOptions& o, CadExportReport& r) {
+  {
+    const auto t0 = std::chrono::steady_clock::now();
     STEPControl_Controller::Init();
     Interface_Static::SetCVal("xstep.cascade.unit", unit);
     Interface_Static::SetCVal("write.step.unit", unit);
@@ -257,18 +234,23 @@ CadExportReport write_step(const std::string& path, const TrianglePatchSet& ps, 
     const Handle(StepData_StepModel) model = writer.Model();
     const Handle(StepData_Protocol) protocol = Handle(StepData_Protocol)::DownCast(writer.WS()->Protocol());
     if (model.IsNull() || protocol.IsNull()) throw Error("STEP export: OpenCASCADE has no STEP model to write");
+    r.translate_seconds = seconds_since(t0);
     if (o.progress) o.progress("writing the STEP file");
+    const auto t1 = std::chrono::steady_clock::now();
     StepData_StepWriter step(model);
     step.SendModel(protocol);
     std::ofstream os(temp, std::ios::binary | std::ios::trunc);
     const bool printed = os && step.Print(os);
     os.close();
     if (!printed || !os) throw IoError(path + ": could not write the STEP file (disk full or no permission?)");
-  });
+    r.write_seconds = seconds_since(t1);
+  }
 }
 
-CadExportReport write_iges(const std::string& path, const TrianglePatchSet& ps, const CadExportOptions& o) {
-  return export_shape("IGES", path, ps, o, [&](const TopoDS_Shape& shape, const char* unit, const std::string& temp) {
+void write_iges_file(const std::string& path, const TopoDS_Shape& shape, const char* unit, const std::string& temp,
+                     const CadExportOptions& o, CadExportReport& r) {
+  {
+    const auto t0 = std::chrono::steady_clock::now();
     IGESControl_Controller::Init();
     Interface_Static::SetCVal("xstep.cascade.unit", unit);
     Interface_Static::SetCVal("write.iges.unit", unit);
@@ -290,12 +272,54 @@ CadExportReport write_iges(const std::string& path, const TrianglePatchSet& ps, 
     for (size_t i = 0; i < text.size(); i += 72)
       start->Append(new TCollection_HAsciiString(text.substr(i, 72).c_str()));
     writer.Model()->SetStartSection(start);
+    r.translate_seconds = seconds_since(t0);
     if (o.progress) o.progress("writing the IGES file");
+    const auto t1 = std::chrono::steady_clock::now();
     std::ofstream os(temp, std::ios::binary | std::ios::trunc);
     const bool printed = os && writer.Write(os);
     os.close();
     if (!printed || !os) throw IoError(path + ": could not write the IGES file (disk full or no permission?)");
-  });
+    r.write_seconds = seconds_since(t1);
+  }
+}
+
+template <class Source>
+CadExportReport step(const std::string& path, const Source& source, const CadExportOptions& o) {
+  return export_shape(
+      "STEP", path, o, [&] { return build(source, o); },
+      [&](const TopoDS_Shape& shape, const char* unit, const std::string& temp, CadExportReport& r) {
+        write_step_file(path, shape, unit, temp, o, r);
+      });
+}
+
+template <class Source>
+CadExportReport iges(const std::string& path, const Source& source, const CadExportOptions& o) {
+  return export_shape(
+      "IGES", path, o, [&] { return build(source, o); },
+      [&](const TopoDS_Shape& shape, const char* unit, const std::string& temp, CadExportReport& r) {
+        write_iges_file(path, shape, unit, temp, o, r);
+      });
+}
+
+}  // namespace
+
+CadExportReport write_step(const std::string& path, const CadRegions& r, const CadExportOptions& o) {
+  return step(path, r, o);
+}
+CadExportReport write_step(const std::string& path, const CadPatches& c, const CadExportOptions& o) {
+  return step(path, c, o);
+}
+CadExportReport write_step(const std::string& path, const Extraction& x, const CadExportOptions& o) {
+  return step(path, x, o);
+}
+CadExportReport write_iges(const std::string& path, const CadRegions& r, const CadExportOptions& o) {
+  return iges(path, r, o);
+}
+CadExportReport write_iges(const std::string& path, const CadPatches& c, const CadExportOptions& o) {
+  return iges(path, c, o);
+}
+CadExportReport write_iges(const std::string& path, const Extraction& x, const CadExportOptions& o) {
+  return iges(path, x, o);
 }
 
 }  // namespace tbs

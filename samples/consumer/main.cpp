@@ -8,7 +8,7 @@
 // this program and runs it. Exit status 0 when the fit, the evaluation and the export agree
 // with the known surface.
 #include <tbs/cad_export.h>
-#include <tbs/cad_patches.h>
+#include <tbs/cad_regions.h>
 #include <tbs/errors.h>
 #include <tbs/evaluator.h>
 #include <tbs/fit.h>
@@ -64,13 +64,13 @@ int main(int argc, char** argv) {
     const tbs::Mesh mesh = tbs::tessellate(fit.spline);
     std::printf("mesh: %zu vertices, %zu triangles\n", mesh.positions.size(), mesh.faces.size());
 
-    // 5. Compact CAD patches, written as STEP.
-    tbs::CadPatchOptions patch_options;
-    patch_options.tolerance = 1e-5;
-    const tbs::CadPatches patches = tbs::make_cad_patches(fit.spline, patch_options);
+    // 5. Region faces (one trimmed B-spline face per smooth region), written as STEP.
+    tbs::CadRegionOptions region_options;
+    region_options.tolerance = 1e-5;
+    const tbs::CadRegions regions = tbs::make_cad_regions(fit.spline, region_options);
     tbs::CadExportOptions export_options;
     export_options.product_name = "consumer sample";
-    const tbs::CadExportReport step = tbs::write_step(out, tbs::patch_set(patches), export_options);
+    const tbs::CadExportReport step = tbs::write_step(out, regions, export_options);
     std::printf("%s: %zu faces, %zu shell(s), %zu free edges\n", out.c_str(), step.faces, step.shells,
                 step.free_edges);
 

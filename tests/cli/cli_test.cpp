@@ -422,7 +422,7 @@ TEST(CliConvert, WritesStepAndIgesWithASummary) {
   const Result loud = run("convert '" + small_spline().string() + "' '" + (dir / "loud.step").string() +
                           "' --cad-tolerance 1e-4");
   ASSERT_EQ(loud.code, 0) << loud.err;
-  for (const char* stage : {"tbs convert: making the B-spline faces of", "tbs convert: sewing ", "tbs convert: checking the shape",
+  for (const char* stage : {"tbs convert: fitting region faces", "tbs convert: building the shell of", "tbs convert: checking the shape",
                             "tbs convert: translating to STEP", "tbs convert: writing the STEP file"})
     EXPECT_NE(loud.err.find(stage), std::string::npos) << stage << "\n" << loud.err;
   // The header carries the product name and the fit's figures.
@@ -492,7 +492,7 @@ TEST(CliConvert, StoredPointsFeedErrorMapsAndHeatMaps) {
   std::snprintf(expected, sizeof expected, "max error          %.4g mm", meta["fit"]["max_error_abs"].get<double>());
   r = run("convert '" + spline.string() + "' '" + (dir / "kept.exr").string() + "' --width 32 -q");
   ASSERT_EQ(r.code, 0) << r.err;
-  EXPECT_NE(r.out.find("(stored points)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("from the points stored in the .tbs"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find(expected), std::string::npos) << r.out;
   // A heat map on the mesh.
   r = run("convert '" + spline.string() + "' '" + (dir / "kept.gltf").string() + "' --color-by error --resolution 2 -q");
@@ -741,15 +741,18 @@ TEST(CliConvert, BadRequestsFailCleanly) {
   EXPECT_EQ(read_file(keep.string()), "old");
   // Out-of-range options are usage errors.
   EXPECT_EQ(run("convert '" + in + "' '" + keep.string() + "' --patch-degree 99").code, 2);
+  EXPECT_EQ(run("convert '" + in + "' '" + keep.string() + "' --faces quads").code, 2);
+  EXPECT_EQ(run("convert '" + in + "' '" + keep.string() + "' --face-degree 1").code, 2);
+  EXPECT_EQ(run("convert '" + in + "' '" + keep.string() + "' --max-poles 4").code, 2);
   EXPECT_EQ(run("convert '" + in + "' '" + keep.string() + "' --cad-tolerance -1").code, 2);
   EXPECT_EQ(run("convert '" + in + "' '" + keep.string() + "' --units furlong").code, 2);
   // A patch degree below the spline's: invalid input.
-  r = run("convert '" + in + "' '" + keep.string() + "' --patch-degree 2");
+  r = run("convert '" + in + "' '" + keep.string() + "' --faces triangles --patch-degree 2");
   EXPECT_EQ(r.code, 3);
   EXPECT_NE(r.err.find("patch degree 2 is out of range"), std::string::npos) << r.err;
   EXPECT_EQ(read_file(keep.string()), "old");
   // A patch budget below one patch per domain triangle: invalid input, naming the file.
-  r = run("convert '" + in + "' '" + keep.string() + "' --max-patches 1");
+  r = run("convert '" + in + "' '" + keep.string() + "' --faces triangles --max-patches 1");
   EXPECT_EQ(r.code, 3);
   EXPECT_NE(r.err.find(in + ": the spline has "), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("raise --max-patches"), std::string::npos) << r.err;

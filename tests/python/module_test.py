@@ -91,7 +91,7 @@ r = spline.export(step, cad_tolerance=1e-4)
 check(open(step, "rb").read(13) == b"ISO-10303-21;" and r["shells"] == 1, "export STEP: %s" % r)
 glb = os.path.join(WORK, "fit.glb")
 r = spline.export(glb)
-check(open(glb, "rb").read(4) == b"glTF" and r["faces"] > 0, "export glb: %s" % r)
+check(open(glb, "rb").read(4) == b"glTF" and r["triangles"] > 0, "export glb: %s" % r)
 expect_raises(tbs.InvalidInput, "export to .dxf", lambda: spline.export(os.path.join(WORK, "x.dxf")))
 check(not os.path.exists(os.path.join(WORK, "x.dxf")), "nothing written for .dxf")
 

@@ -1,0 +1,1107 @@
+// Region faces (cad_regions.h): smooth regions of the domain, one trimmed B-spline surface each.
+
+#include <tbs/cad_regions.h>
+#include <tbs/errors.h>
+#include <tbs/evaluator.h>
+#include <tbs/predicates.h>
+
+#include "bspline_basis.h"
+#include "side_eval.h"
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <queue>
+
+namespace tbs {
+
+const char* to_string(RegionEdgeKind kind) {
+  switch (kind) {
+    case RegionEdgeKind::Boundary: return "boundary";
+    case RegionEdgeKind::Crease: return "crease";
+    case RegionEdgeKind::CreaseExtension: return "crease extension";
+    case RegionEdgeKind::Split: return "split";
+  }
+  return "?";
+}
+
+namespace {
+
+using detail::Basis;
+using detail::basis_functions;
+using detail::find_span;
+
+constexpr double kPi = 3.14159265358979323846;
+// The fit aims below the tolerances, so that the surface between the check samples stays
+// within them.
+constexpr double kPositionMargin = 0.7;
+constexpr double kNormalMargin = 0.8;
+// Trim curves aim at a quarter of the tolerance: the edge gap adds the face's deviation.
+constexpr double kCurveMargin = 0.25;
+// Normals are compared where sin(angle between the tangents) is at least this.
+constexpr double kRegular = 1e-2;
+// Thin-plate weights, relative to the data of a cell: tiny inside the region (it only keeps
+// the least-squares system regular where a cell has few samples), stronger outside it, where
+// it alone shapes the surface.
+constexpr double kSmoothInside = 1e-6;
+constexpr double kSmoothOutside = 1e-2;
+// Two segments of a trim chain are one straight edge when the sine of their angle is below
+// this: the straight line then misses the middle vertex by at most 1e-9 of its length.
+constexpr double kCollinear = 1e-9;
+constexpr int kMaxRounds = 14;
+// The rectangle of a face reaches this fraction of its size past the region, so that no trim
+// lies on the surface's own boundary.
+constexpr double kMargin = 2e-3;
+// Resolution of the check lattice in every domain triangle.
+constexpr int kLattice = 8;
+
+struct Sample {
+  Point2 uv;
+  Point3 f;
+  Vector3 fu = Vector3::Zero(), fv = Vector3::Zero();
+  Vector3 n;        // unit normal of the spline, on the region's side
+  bool regular = false;
+};
+
+double angle_deg(const Vector3& a, const Vector3& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180 / kPi;
+}
+
+bool regular(const SurfacePoint& p) {
+  return p.du.cross(p.dv).norm() >= kRegular * p.du.norm() * p.dv.norm() && p.du.norm() > 0;
+}
+
+// The domain with the borders of the regions and the region label of every triangle.
+class Regions {
+ public:
+  explicit Regions(const Domain& d) : d_(d), kind_(static_cast<size_t>(d.edge_count())),
+                                      border_(static_cast<size_t>(d.edge_count()), 0),
+                                      vertex_edges_(static_cast<size_t>(d.vertex_count())) {
+    for (int e = 0; e < d.edge_count(); ++e) {
+      for (int v : d.edges()[static_cast<size_t>(e)]) vertex_edges_[static_cast<size_t>(v)].push_back(e);
+      if (d.is_boundary_edge(e)) {
+        border_[static_cast<size_t>(e)] = 1;
+        kind_[static_cast<size_t>(e)] = RegionEdgeKind::Boundary;
+      } else if (d.is_feature_edge(e)) {
+        border_[static_cast<size_t>(e)] = 1;
+        kind_[static_cast<size_t>(e)] = RegionEdgeKind::Crease;
+      }
+    }
+  }
+
+  const Domain& domain() const { return d_; }
+  // Interior vertices where a crease ended (before extend_creases() extended it).
+  const std::vector<int>& crease_tips() const { return tips_; }
+  RegionEdgeKind kind(int e) const { return kind_[static_cast<size_t>(e)]; }
+  int label(int t) const { return label_[static_cast<size_t>(t)]; }
+  int region_count() const { return static_cast<int>(members_.size()); }
+  const std::vector<int>& triangles(int r) const { return members_[static_cast<size_t>(r)]; }
+  const std::vector<int>& vertex_edges(int v) const { return vertex_edges_[static_cast<size_t>(v)]; }
+  int other(int e, int v) const {
+    const auto& ed = d_.edges()[static_cast<size_t>(e)];
+    return ed[0] == v ? ed[1] : ed[0];
+  }
+
+  // Extends every crease that ends at an interior vertex along domain edges to the nearest
+  // border vertex, preferring to go straight on. Returns (extended, left inside).
+  std::pair<int, int> extend_creases() {
+    int extended = 0, left = 0;
+    tips_.clear();
+    std::vector<int> degree(static_cast<size_t>(d_.vertex_count()), 0);
+    for (int e = 0; e < d_.edge_count(); ++e)
+      if (border_[static_cast<size_t>(e)])
+        for (int v : d_.edges()[static_cast<size_t>(e)]) ++degree[static_cast<size_t>(v)];
+    auto on_border = [&](int v) { return d_.is_boundary_vertex(v) || degree[static_cast<size_t>(v)] > 0; };
+    for (int v = 0; v < d_.vertex_count(); ++v) {
+      if (d_.is_boundary_vertex(v) || degree[static_cast<size_t>(v)] != 1) continue;
+      tips_.push_back(v);
+      // The crease's own chain back to its first junction: not a target.
+      std::vector<char> excluded(static_cast<size_t>(d_.vertex_count()), 0);
+      excluded[static_cast<size_t>(v)] = 1;
+      int prev = v, cur = -1;
+      for (int e : vertex_edges(v))
+        if (border_[static_cast<size_t>(e)]) cur = other(e, v);
+      const Vector2 dir = (d_.vertex(v) - d_.vertex(cur)).normalized();
+      while (!d_.is_boundary_vertex(cur) && degree[static_cast<size_t>(cur)] <= 2 && !excluded[static_cast<size_t>(cur)]) {
+        excluded[static_cast<size_t>(cur)] = 1;
+        int next = -1;
+        for (int e : vertex_edges(cur))
+          if (border_[static_cast<size_t>(e)] && other(e, cur) != prev) next = other(e, cur);
+        if (next < 0) break;
+        prev = cur;
+        cur = next;
+      }
+      // Dijkstra over non-border edges; a turn away from the crease's direction costs extra.
+      std::vector<double> dist(static_cast<size_t>(d_.vertex_count()), std::numeric_limits<double>::infinity());
+      std::vector<int> from(static_cast<size_t>(d_.vertex_count()), -1);
+      using Item = std::pair<double, int>;
+      std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+      dist[static_cast<size_t>(v)] = 0;
+      queue.push({0.0, v});
+      int target = -1;
+      while (!queue.empty()) {
+        const auto [dv, a] = queue.top();
+        queue.pop();
+        if (dv > dist[static_cast<size_t>(a)]) continue;
+        if (a != v && on_border(a)) {
+          if (!excluded[static_cast<size_t>(a)]) {
+            target = a;
+            break;
+          }
+          continue;  // through no border vertex
+        }
+        for (int e : vertex_edges(a)) {
+          if (border_[static_cast<size_t>(e)]) continue;
+          const int b = other(e, a);
+          const Vector2 step = d_.vertex(b) - d_.vertex(a);
+          const double len = step.norm();
+          const double turn = 1 - std::clamp(step.dot(dir) / std::max(len, 1e-300), -1.0, 1.0);
+          const double nd = dv + len * (1 + 2 * turn);
+          if (nd < dist[static_cast<size_t>(b)]) {
+            dist[static_cast<size_t>(b)] = nd;
+            from[static_cast<size_t>(b)] = e;
+            queue.push({nd, b});
+          }
+        }
+      }
+      if (target < 0) {
+        ++left;
+        continue;
+      }
+      for (int b = target; b != v;) {
+        const int e = from[static_cast<size_t>(b)];
+        border_[static_cast<size_t>(e)] = 1;
+        kind_[static_cast<size_t>(e)] = RegionEdgeKind::CreaseExtension;
+        for (int w : d_.edges()[static_cast<size_t>(e)]) ++degree[static_cast<size_t>(w)];
+        b = other(e, b);
+      }
+      ++extended;
+    }
+    return {extended, left};
+  }
+
+  // Labels the triangles: connected across edges that are not borders, numbered by their
+  // smallest triangle.
+  void label_all() {
+    label_.assign(static_cast<size_t>(d_.triangle_count()), -1);
+    members_.clear();
+    for (int t = 0; t < d_.triangle_count(); ++t)
+      if (label_[static_cast<size_t>(t)] < 0) flood(t, static_cast<int>(members_.size()), -1);
+  }
+
+  // Cuts region r along a chain of domain edges across its longer side, through vertices
+  // that are on no border, from its outer loop to its outer loop. The parts get new labels
+  // (the part with the smallest triangle keeps r). Returns false if there is no such chain.
+  bool split(int r) {
+    const std::vector<int> tris = members_[static_cast<size_t>(r)];
+    if (tris.size() < 2) return false;
+    Box2 box;
+    for (int t : tris)
+      for (int v : d_.triangle(t)) box.extend(d_.vertex(v));
+    const Vector2 ext = box.max - box.min;
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      const int axis = (ext.x() >= ext.y()) == (attempt == 0) ? 0 : 1;
+      if (cut_across(r, tris, box, axis)) return true;
+    }
+    return false;
+  }
+
+  // Domain edges on the border of region r (one per half-edge: the region is on its left):
+  // (from, to, triangle of r on the left).
+  struct HalfEdge {
+    int from, to, triangle;
+  };
+  std::vector<HalfEdge> border_half_edges(int r) const {
+    std::vector<HalfEdge> out;
+    for (int t : members_[static_cast<size_t>(r)]) {
+      const auto& c = d_.triangle(t);
+      for (int k = 0; k < 3; ++k) {
+        const int e = d_.triangle_edge(t, k);
+        if (is_region_border(e)) out.push_back({c[static_cast<size_t>((k + 1) % 3)], c[static_cast<size_t>((k + 2) % 3)], t});
+      }
+    }
+    return out;
+  }
+
+  // An edge between two regions, or on the boundary.
+  bool is_region_border(int e) const {
+    const auto tr = d_.edge_triangles(e);
+    return tr[1] < 0 || label_[static_cast<size_t>(tr[0])] != label_[static_cast<size_t>(tr[1])];
+  }
+
+  // The next border half-edge of the region after (a -> b) with left triangle t: turn around
+  // b through the region's triangles.
+  HalfEdge next_border(const HalfEdge& h) const {
+    int cur = h.triangle;
+    const int r = label_[static_cast<size_t>(cur)];
+    for (int guard = 0; guard < 100000; ++guard) {
+      const auto& c = d_.triangle(cur);
+      const int j = c[0] == h.to ? 0 : c[1] == h.to ? 1 : 2;
+      const int x = c[static_cast<size_t>((j + 1) % 3)];
+      const int e = d_.triangle_edge(cur, (j + 2) % 3);
+      const auto tr = d_.edge_triangles(e);
+      const int across = tr[0] == cur ? tr[1] : tr[0];
+      if (across < 0 || label_[static_cast<size_t>(across)] != r) return {h.to, x, cur};
+      cur = across;
+    }
+    throw Error("region faces: a region's border does not close around vertex " + std::to_string(h.to));
+  }
+
+  // The border loops of region r as half-edge sequences; the outer one (largest positive
+  // area) first.
+  std::vector<std::vector<HalfEdge>> loops(int r) const {
+    const std::vector<HalfEdge> all = border_half_edges(r);
+    std::map<std::pair<int, int>, size_t> index;
+    for (size_t i = 0; i < all.size(); ++i) index[{all[i].from, all[i].to}] = i;
+    std::vector<char> used(all.size(), 0);
+    std::vector<std::vector<HalfEdge>> out;
+    std::vector<double> area;
+    for (size_t i = 0; i < all.size(); ++i) {
+      if (used[i]) continue;
+      std::vector<HalfEdge> loop;
+      HalfEdge h = all[i];
+      double a = 0;
+      while (true) {
+        const size_t k = index.at({h.from, h.to});
+        if (used[k]) break;
+        used[k] = 1;
+        loop.push_back(h);
+        const Point2 &p = d_.vertex(h.from), &q = d_.vertex(h.to);
+        a += p.x() * q.y() - p.y() * q.x();
+        h = next_border(h);
+      }
+      out.push_back(std::move(loop));
+      area.push_back(a / 2);
+    }
+    std::vector<size_t> order(out.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(), [&](size_t x, size_t y) { return area[x] > area[y]; });
+    std::vector<std::vector<HalfEdge>> sorted;
+    for (size_t k : order) sorted.push_back(std::move(out[k]));
+    return sorted;
+  }
+
+ private:
+  void flood(int seed, int id, int only) {
+    if (static_cast<int>(members_.size()) <= id) members_.resize(static_cast<size_t>(id) + 1);
+    std::vector<int>& m = members_[static_cast<size_t>(id)];
+    m.clear();
+    std::vector<int> stack{seed};
+    label_[static_cast<size_t>(seed)] = id;
+    while (!stack.empty()) {
+      const int t = stack.back();
+      stack.pop_back();
+      m.push_back(t);
+      for (int k = 0; k < 3; ++k) {
+        const int e = d_.triangle_edge(t, k);
+        if (border_[static_cast<size_t>(e)]) continue;
+        const auto tr = d_.edge_triangles(e);
+        const int n = tr[0] == t ? tr[1] : tr[0];
+        if (n < 0 || label_[static_cast<size_t>(n)] != only) continue;
+        label_[static_cast<size_t>(n)] = id;
+        stack.push_back(n);
+      }
+    }
+    std::sort(m.begin(), m.end());
+  }
+
+  bool cut_across(int r, const std::vector<int>& tris, const Box2& box, int axis) {
+    const int across = 1 - axis;
+    const double mid = 0.5 * (box.min[axis] + box.max[axis]);
+    const double extent = std::max(box.max[axis] - box.min[axis], 1e-300);
+    const std::vector<std::vector<HalfEdge>> lp = loops(r);
+    if (lp.empty()) return false;
+    std::vector<char> outer(static_cast<size_t>(d_.vertex_count()), 0), on_border(outer.size(), 0);
+    for (const auto& l : lp)
+      for (const HalfEdge& h : l) on_border[static_cast<size_t>(h.from)] = 1;
+    for (const HalfEdge& h : lp[0]) outer[static_cast<size_t>(h.from)] = 1;
+    // From the outer vertex nearest to the middle of the low side to the one nearest to the
+    // middle of the high side.
+    auto nearest = [&](double side) {
+      int best = -1;
+      double bd = std::numeric_limits<double>::infinity();
+      for (const HalfEdge& h : lp[0]) {
+        Point2 target;
+        target[axis] = mid;
+        target[across] = side;
+        const double dd = (d_.vertex(h.from) - target).norm();
+        if (dd < bd) bd = dd, best = h.from;
+      }
+      return best;
+    };
+    const int s = nearest(box.min[across]), goal = nearest(box.max[across]);
+    if (s < 0 || goal < 0 || s == goal) return false;
+    std::vector<char> in_region(static_cast<size_t>(d_.triangle_count()), 0);
+    for (int t : tris) in_region[static_cast<size_t>(t)] = 1;
+    auto inner_edge = [&](int e) {
+      const auto tr = d_.edge_triangles(e);
+      return tr[1] >= 0 && in_region[static_cast<size_t>(tr[0])] && in_region[static_cast<size_t>(tr[1])] &&
+             !border_[static_cast<size_t>(e)];
+    };
+    std::vector<double> dist(outer.size(), std::numeric_limits<double>::infinity());
+    std::vector<int> from(outer.size(), -1);
+    using Item = std::pair<double, int>;
+    std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+    dist[static_cast<size_t>(s)] = 0;
+    queue.push({0.0, s});
+    bool found = false;
+    while (!queue.empty()) {
+      const auto [dv, a] = queue.top();
+      queue.pop();
+      if (dv > dist[static_cast<size_t>(a)]) continue;
+      if (a == goal) {
+        found = true;
+        break;
+      }
+      if (a != s && on_border[static_cast<size_t>(a)]) continue;
+      for (int e : vertex_edges(a)) {
+        if (!inner_edge(e)) continue;
+        const int b = other(e, a);
+        if (on_border[static_cast<size_t>(b)] && b != goal) continue;
+        const Point2 &pa = d_.vertex(a), &pb = d_.vertex(b);
+        const double off = 0.5 * (std::fabs(pa[axis] - mid) + std::fabs(pb[axis] - mid)) / extent;
+        const double nd = dv + (pb - pa).norm() * (1 + 20 * off);
+        if (nd < dist[static_cast<size_t>(b)]) {
+          dist[static_cast<size_t>(b)] = nd;
+          from[static_cast<size_t>(b)] = e;
+          queue.push({nd, b});
+        }
+      }
+    }
+    if (!found) return false;
+    for (int b = goal; b != s;) {
+      const int e = from[static_cast<size_t>(b)];
+      border_[static_cast<size_t>(e)] = 1;
+      kind_[static_cast<size_t>(e)] = RegionEdgeKind::Split;
+      b = other(e, b);
+    }
+    // Relabel: the part with the smallest triangle keeps r, the other parts get new labels.
+    for (int t : tris) label_[static_cast<size_t>(t)] = -2;
+    bool first = true;
+    for (int t : tris) {
+      if (label_[static_cast<size_t>(t)] != -2) continue;
+      flood(t, first ? r : static_cast<int>(members_.size()), -2);
+      first = false;
+    }
+    return true;
+  }
+
+  const Domain& d_;
+  std::vector<RegionEdgeKind> kind_;
+  std::vector<char> border_;
+  std::vector<std::vector<int>> vertex_edges_;
+  std::vector<int> label_;
+  std::vector<std::vector<int>> members_;
+  std::vector<int> tips_;
+};
+
+// Least squares on a tensor-product B-spline space: the normal equations in a band over the
+// pole grid (pole (i, j) couples with poles within degree steps in each direction).
+class TensorSystem {
+ public:
+  TensorSystem(int p, const std::vector<double>& ku, const std::vector<double>& kv)
+      : p_(p), ku_(ku), kv_(kv), nu_(static_cast<int>(ku.size()) - p - 1), nv_(static_cast<int>(kv.size()) - p - 1),
+        w_(2 * p + 1), band_(static_cast<size_t>(nu_) * static_cast<size_t>(nv_) * static_cast<size_t>(w_ * w_), 0.0),
+        rhs_(Eigen::MatrixX3d::Zero(static_cast<Eigen::Index>(nu_) * nv_, 3)) {}
+
+  int pole_count() const { return nu_ * nv_; }
+
+  // A sample of the value f and, with weight wd > 0, of the partial derivatives fu, fv.
+  void add_sample(const Point2& uv, const Point3& f, const Vector3& fu, const Vector3& fv, double wd) {
+    const int su = find_span(ku_, p_, uv.x()), sv = find_span(kv_, p_, uv.y());
+    Basis bu, bv;
+    const int order = wd > 0 ? 1 : 0;
+    basis_functions(ku_, p_, su, uv.x(), order, bu);
+    basis_functions(kv_, p_, sv, uv.y(), order, bv);
+    constexpr int kN = (detail::kMaxBasisDegree + 1) * (detail::kMaxBasisDegree + 1);
+    double w[kN], wu[kN], wv[kN];
+    const int n = p_ + 1;
+    for (int b = 0; b < n; ++b)
+      for (int a = 0; a < n; ++a) {
+        w[a + n * b] = bu.value[a] * bv.value[b];
+        if (order) {
+          wu[a + n * b] = bu.d1[a] * bv.value[b];
+          wv[a + n * b] = bu.value[a] * bv.d1[b];
+        }
+      }
+    const int i0 = su - p_, j0 = sv - p_;
+    for (int b = 0; b < n; ++b)
+      for (int a = 0; a < n; ++a) {
+        const int ab = a + n * b;
+        const int k = i0 + a + nu_ * (j0 + b);
+        Eigen::RowVector3d r = w[ab] * f.transpose();
+        if (order) r += wd * (wu[ab] * fu.transpose() + wv[ab] * fv.transpose());
+        rhs_.row(k) += r;
+        double* row = &band_[static_cast<size_t>(k) * static_cast<size_t>(w_ * w_)];
+        for (int d = 0; d < n; ++d)
+          for (int c = 0; c < n; ++c) {
+            const int cd = c + n * d;
+            double v = w[ab] * w[cd];
+            if (order) v += wd * (wu[ab] * wu[cd] + wv[ab] * wv[cd]);
+            row[(c - a + p_) + w_ * (d - b + p_)] += v;
+          }
+      }
+  }
+
+  // lambda times the thin-plate energy of cell (iu, jv) (span indices from 0).
+  void add_thin_plate(int iu, int jv, double lambda) {
+    const int su = iu + p_, sv = jv + p_;
+    double mu[3][10][10], mv[3][10][10];
+    span_gram(ku_, su, mu);
+    span_gram(kv_, sv, mv);
+    const int n = p_ + 1, i0 = su - p_, j0 = sv - p_;
+    for (int b = 0; b < n; ++b)
+      for (int a = 0; a < n; ++a) {
+        const int k = i0 + a + nu_ * (j0 + b);
+        double* row = &band_[static_cast<size_t>(k) * static_cast<size_t>(w_ * w_)];
+        for (int d = 0; d < n; ++d)
+          for (int c = 0; c < n; ++c)
+            row[(c - a + p_) + w_ * (d - b + p_)] +=
+                lambda * (mu[2][a][c] * mv[0][b][d] + 2 * mu[1][a][c] * mv[1][b][d] + mu[0][a][c] * mv[2][b][d]);
+      }
+  }
+
+  // The poles, or empty if the system could not be factored.
+  std::vector<Point3> solve() const {
+    std::vector<Eigen::Triplet<double>> entries;
+    entries.reserve(static_cast<size_t>(pole_count()) * static_cast<size_t>(w_ * w_ / 2 + 1));
+    for (int j = 0; j < nv_; ++j)
+      for (int i = 0; i < nu_; ++i) {
+        const int k = i + nu_ * j;
+        const double* row = &band_[static_cast<size_t>(k) * static_cast<size_t>(w_ * w_)];
+        for (int dj = -p_; dj <= p_; ++dj)
+          for (int di = -p_; di <= p_; ++di) {
+            const int i2 = i + di, j2 = j + dj;
+            if (i2 < 0 || i2 >= nu_ || j2 < 0 || j2 >= nv_) continue;
+            const int l = i2 + nu_ * j2;
+            if (l > k) continue;  // lower triangle
+            const double v = row[(di + p_) + w_ * (dj + p_)];
+            if (v != 0) entries.emplace_back(k, l, v);
+          }
+      }
+    Eigen::SparseMatrix<double> a(pole_count(), pole_count());
+    a.setFromTriplets(entries.begin(), entries.end());
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt(a);
+    if (ldlt.info() != Eigen::Success) return {};
+    const Eigen::MatrixX3d x = ldlt.solve(rhs_);
+    if (ldlt.info() != Eigen::Success || !x.allFinite()) return {};
+    std::vector<Point3> poles(static_cast<size_t>(pole_count()));
+    for (int k = 0; k < pole_count(); ++k) poles[static_cast<size_t>(k)] = x.row(k).transpose();
+    return poles;
+  }
+
+ private:
+  // Gram matrices of the basis functions of span s and of their first and second
+  // derivatives, integrated over the span (Gauss-Legendre, exact for these degrees).
+  void span_gram(const std::vector<double>& k, int s, double g[3][10][10]) const {
+    static const double x5[] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831, 0.9061798459386640};
+    static const double w5[] = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889, 0.4786286704993665,
+                                0.2369268850561891};
+    static const double x10[] = {-0.9739065285171717, -0.8650633666889845, -0.6794095682990244, -0.4333953941292472,
+                                 -0.1488743389816312, 0.1488743389816312,  0.4333953941292472,  0.6794095682990244,
+                                 0.8650633666889845,  0.9739065285171717};
+    static const double w10[] = {0.0666713443086881, 0.1494513491505806, 0.2190863625159820, 0.2692667193099963,
+                                 0.2955242247147529, 0.2955242247147529, 0.2692667193099963, 0.2190863625159820,
+                                 0.1494513491505806, 0.0666713443086881};
+    const bool small = p_ <= 4;
+    const int m = small ? 5 : 10;
+    const double* x = small ? x5 : x10;
+    const double* w = small ? w5 : w10;
+    const double a = k[static_cast<size_t>(s)], b = k[static_cast<size_t>(s + 1)];
+    for (int o = 0; o < 3; ++o)
+      for (int i = 0; i < 10; ++i)
+        for (int j = 0; j < 10; ++j) g[o][i][j] = 0;
+    for (int q = 0; q < m; ++q) {
+      const double t = 0.5 * (a + b) + 0.5 * (b - a) * x[q], wt = 0.5 * (b - a) * w[q];
+      Basis bs;
+      basis_functions(k, p_, s, t, 2, bs);
+      const double* f[3] = {bs.value, bs.d1, bs.d2};
+      for (int o = 0; o < 3; ++o)
+        for (int i = 0; i <= p_; ++i)
+          for (int j = 0; j <= p_; ++j) g[o][i][j] += wt * f[o][i] * f[o][j];
+    }
+  }
+
+  int p_;
+  const std::vector<double>& ku_;
+  const std::vector<double>& kv_;
+  int nu_, nv_, w_;
+  std::vector<double> band_;
+  Eigen::MatrixX3d rhs_;
+};
+
+struct Context {
+  const Spline& spline;
+  const Evaluator& ev;
+  const Regions& regions;
+  const CadRegionOptions& o;
+  double tol = 0;
+  double angle = 0;  // the normal limit: half the angle tolerance
+  // The check lattice of every domain triangle.
+  std::vector<Sample> lattice;
+  std::vector<size_t> lattice_start;
+  // Triangles around the end of a crease: the spline's normal is not continuous at that
+  // vertex (the crease's angle on one side, none on the other), so no smooth face can follow
+  // it there; normals are not compared in them. (Normals are compared only along the borders
+  // where two faces meet: that is where the angle tolerance keeps them together.)
+  std::vector<char> near_tip;
+};
+
+std::array<Point2, 3> corners(const Domain& d, int t) {
+  const auto& c = d.triangle(t);
+  return {d.vertex(c[0]), d.vertex(c[1]), d.vertex(c[2])};
+}
+
+Sample make_sample(const Point2& uv, const SurfacePoint& sp, bool compare_normal = true) {
+  Sample s;
+  s.uv = uv;
+  s.f = sp.position;
+  s.fu = sp.du;
+  s.fv = sp.dv;
+  s.regular = compare_normal && regular(sp);
+  s.n = detail::unit_normal(sp);
+  return s;
+}
+
+struct FitResult {
+  BSplineSurface3 surface;
+  double position_dev = std::numeric_limits<double>::infinity();
+  double normal_dev = 0;
+  bool within = false;
+  bool over_budget = false;
+};
+
+std::vector<double> uniform_breaks(double a, double b, int spans) {
+  std::vector<double> br(static_cast<size_t>(spans) + 1);
+  for (int i = 0; i <= spans; ++i) br[static_cast<size_t>(i)] = a + (b - a) * i / spans;
+  br.back() = b;
+  return br;
+}
+
+// The spans (indices into breaks) that hold u, both of them when u is a break point.
+int span_of(const std::vector<double>& breaks, double u) {
+  const auto it = std::upper_bound(breaks.begin(), breaks.end(), u);
+  const int i = static_cast<int>(it - breaks.begin()) - 1;
+  return std::clamp(i, 0, static_cast<int>(breaks.size()) - 2);
+}
+
+// Samples along the border of a region, evaluated on the region's side, about `spacing`
+// apart (in (u, v)); `offset` 0.5 gives the points halfway between those of offset 0.
+void border_samples(const Context& c, const std::vector<Regions::HalfEdge>& border, double spacing,
+                    double offset, std::vector<Sample>& out) {
+  const Domain& d = c.spline.domain();
+  for (const auto& h : border) {
+    const Point2 &a = d.vertex(h.from), &b = d.vertex(h.to);
+    const int count = static_cast<int>(std::clamp(std::ceil((b - a).norm() / spacing), 1.0, 4096.0));
+    const auto tri = corners(d, h.triangle);
+    for (int k = 0; k < count; ++k) {
+      const double t = (k + offset) / count;
+      const Point2 u = a + t * (b - a);
+      // Normals matter where this face meets another one: not on the domain's boundary.
+      const bool shared = !d.is_boundary_edge(d.find_edge(h.from, h.to));
+      out.push_back(make_sample(u, detail::evaluate_in_triangle(c.ev, tri, u),
+                                shared && !c.near_tip[static_cast<size_t>(h.triangle)]));
+    }
+  }
+}
+
+// Points of the rectangle grid given by (us x vs) that lie in region r, evaluated.
+void grid_samples(const Context& c, int r, const std::vector<double>& us, const std::vector<double>& vs,
+                  bool derivatives, std::vector<Sample>& out) {
+  std::vector<Point2> pts;
+  std::vector<char> compare;
+  pts.reserve(us.size() * vs.size());
+  for (double v : vs)
+    for (double u : us) {
+      const Point2 p(u, v);
+      const int t = c.ev.locate(p);
+      if (t >= 0 && c.regions.label(t) == r) {
+        pts.push_back(p);
+        compare.push_back(false);
+      }
+    }
+  std::vector<Point3> pos(pts.size());
+  std::vector<Vector3> du(derivatives ? pts.size() : 0), dv(derivatives ? pts.size() : 0);
+  std::vector<uint8_t> inside(pts.size());
+  c.ev.evaluate_batch(pts, pos, du, dv, inside, c.o.threads);
+  for (size_t i = 0; i < pts.size(); ++i) {
+    if (!inside[i]) continue;
+    SurfacePoint sp{pos[i], derivatives ? du[i] : Vector3::Zero(), derivatives ? dv[i] : Vector3::Zero()};
+    out.push_back(make_sample(pts[i], sp, derivatives && compare[i]));
+  }
+}
+
+// Every break and the midpoint of every span.
+std::vector<double> breaks_and_midpoints(const std::vector<double>& br) {
+  std::vector<double> out;
+  for (size_t i = 0; i + 1 < br.size(); ++i) {
+    out.push_back(br[i]);
+    out.push_back(0.5 * (br[i] + br[i + 1]));
+  }
+  out.push_back(br.back());
+  return out;
+}
+
+// (p + 1) points inside every span, at (k + 1/2) / (p + 1).
+std::vector<double> inner_points(const std::vector<double>& br, int p) {
+  std::vector<double> out;
+  for (size_t i = 0; i + 1 < br.size(); ++i)
+    for (int k = 0; k <= p; ++k) out.push_back(br[i] + (br[i + 1] - br[i]) * (k + 0.5) / (p + 1));
+  return out;
+}
+
+FitResult fit_region(const Context& c, int r) {
+  const Domain& d = c.spline.domain();
+  const std::vector<int>& tris = c.regions.triangles(r);
+  const int p = c.o.degree;
+  Box2 box;
+  double area = 0;
+  for (int t : tris) {
+    const auto tri = corners(d, t);
+    for (const Point2& q : tri) box.extend(q);
+    area += 0.5 * std::fabs(det3(tri[0], tri[1], tri[2]));
+  }
+  const Vector2 size = box.max - box.min;
+  const double margin = kMargin * std::max(size.x(), size.y());
+  const Point2 lo = box.min - Vector2::Constant(margin), hi = box.max + Vector2::Constant(margin);
+  const double h = std::sqrt(2 * area / static_cast<double>(tris.size()));
+  const auto border = c.regions.border_half_edges(r);
+
+  // The fixed part of the check: the lattice of every triangle of the region.
+  std::vector<Sample> lattice;
+  for (int t : tris)
+    lattice.insert(lattice.end(), c.lattice.begin() + static_cast<long>(c.lattice_start[static_cast<size_t>(t)]),
+                   c.lattice.begin() + static_cast<long>(c.lattice_start[static_cast<size_t>(t) + 1]));
+
+  auto spans_for = [&](double extent) { return std::max(1, static_cast<int>(std::ceil(extent / h))); };
+  std::vector<double> bu = uniform_breaks(lo.x(), hi.x(), spans_for(hi.x() - lo.x()));
+  std::vector<double> bv = uniform_breaks(lo.y(), hi.y(), spans_for(hi.y() - lo.y()));
+  // Start below a quarter of the budget.
+  while (static_cast<long>(bu.size() - 1 + static_cast<size_t>(p)) * static_cast<long>(bv.size() - 1 + static_cast<size_t>(p)) >
+             c.o.max_poles / 4 &&
+         (bu.size() > 2 || bv.size() > 2)) {
+    if (bu.size() >= bv.size())
+      bu = uniform_breaks(lo.x(), hi.x(), static_cast<int>(bu.size() - 1) / 2);
+    else
+      bv = uniform_breaks(lo.y(), hi.y(), static_cast<int>(bv.size() - 1) / 2);
+  }
+
+  // Derivatives are fitted too, weighted so that an error of the normal limit in them weighs
+  // as much as one of the tolerance in position: |F_u| * angle ~ tol.
+  std::vector<double> speeds;
+  for (const Sample& q : lattice) speeds.push_back(std::max(q.fu.norm(), q.fv.norm()));
+  std::nth_element(speeds.begin(), speeds.begin() + static_cast<long>(speeds.size() / 2), speeds.end());
+  const double speed = speeds.empty() ? 0.0 : speeds[speeds.size() / 2];
+  const double slope = speed * c.angle * kPi / 180;
+  const double derivative_weight = slope > 0 ? (c.tol / slope) * (c.tol / slope) : 0.0;
+
+  FitResult best;
+  for (int round = 0; round < kMaxRounds; ++round) {
+    const long poles = static_cast<long>(bu.size() - 1 + static_cast<size_t>(p)) *
+                       static_cast<long>(bv.size() - 1 + static_cast<size_t>(p));
+    if (poles > c.o.max_poles) {
+      best.over_budget = true;
+      return best;
+    }
+    BSplineSurface3 s;
+    s.degree_u = s.degree_v = p;
+    s.knots_u = detail::clamped_knots(p, bu);
+    s.knots_v = detail::clamped_knots(p, bv);
+    double min_span = std::numeric_limits<double>::infinity();
+    for (size_t i = 0; i + 1 < bu.size(); ++i) min_span = std::min(min_span, bu[i + 1] - bu[i]);
+    for (size_t i = 0; i + 1 < bv.size(); ++i) min_span = std::min(min_span, bv[i + 1] - bv[i]);
+
+    // Fit samples: 4 x 4 per cell (with derivatives), and the border.
+    std::vector<Sample> fit;
+    grid_samples(c, r, inner_points(bu, std::min(p, 3)), inner_points(bv, std::min(p, 3)), true, fit);
+    border_samples(c, border, min_span / (p + 1), 0.0, fit);
+    TensorSystem sys(p, s.knots_u, s.knots_v);
+    for (const Sample& q : fit) sys.add_sample(q.uv, q.f, q.fu, q.fv, derivative_weight);
+    // Thin plate per cell: relative to the data a cell holds, 4 x 4 samples.
+    const double per_cell = 16;
+    for (size_t j = 0; j + 1 < bv.size(); ++j)
+      for (size_t i = 0; i + 1 < bu.size(); ++i) {
+        const double hu = bu[i + 1] - bu[i], hv = bv[j + 1] - bv[j], hm = std::max(hu, hv);
+        const Point2 centre(0.5 * (bu[i] + bu[i + 1]), 0.5 * (bv[j] + bv[j + 1]));
+        const int t = c.ev.locate(centre);
+        const bool inside = t >= 0 && c.regions.label(t) == r;
+        const double lambda = (inside ? kSmoothInside : kSmoothOutside) * per_cell * hm * hm * hm * hm / (hu * hv);
+        sys.add_thin_plate(static_cast<int>(i), static_cast<int>(j), lambda);
+      }
+    s.poles = sys.solve();
+    if (s.poles.empty()) throw SolverError("region faces: the least-squares system of a region could not be solved");
+
+    // Check samples: breaks and midpoints of the grid, the border between the fit samples,
+    // and the triangle lattices.
+    std::vector<Sample> check;
+    grid_samples(c, r, breaks_and_midpoints(bu), breaks_and_midpoints(bv), true, check);
+    border_samples(c, border, min_span / (p + 1), 0.5, check);
+    check.insert(check.end(), lattice.begin(), lattice.end());
+    double pos_dev = 0, normal_dev = 0;
+    std::vector<char> mark_u(bu.size() - 1, 0), mark_v(bv.size() - 1, 0);
+    bool failed = false;
+    for (const Sample& q : check) {
+      Point3 sp;
+      Vector3 su, sv;
+      s.evaluate(q.uv, sp, su, sv);
+      const double dev = (sp - q.f).norm();
+      double ang = 0;
+      const Vector3 n = su.cross(sv);
+      if (q.regular && n.norm() > 0) ang = angle_deg(n, q.n);
+      pos_dev = std::max(pos_dev, dev);
+      normal_dev = std::max(normal_dev, ang);
+      if (dev > kPositionMargin * c.tol || ang > kNormalMargin * c.angle) {
+        failed = true;
+        const int iu = span_of(bu, q.uv.x()), jv = span_of(bv, q.uv.y());
+        // Refine the direction in which the cell is long on the surface.
+        const double lu = su.norm() * (bu[static_cast<size_t>(iu) + 1] - bu[static_cast<size_t>(iu)]);
+        const double lv = sv.norm() * (bv[static_cast<size_t>(jv) + 1] - bv[static_cast<size_t>(jv)]);
+        if (lu >= 0.5 * lv) mark_u[static_cast<size_t>(iu)] = 1;
+        if (lv >= 0.5 * lu) mark_v[static_cast<size_t>(jv)] = 1;
+      }
+    }
+    if (getenv("TBS_DEBUG_REGIONS")) {
+      double worst = 0; const Sample* wq = nullptr;
+      for (const Sample& q : check) { Point3 sp; Vector3 su, sv; s.evaluate(q.uv, sp, su, sv); double sc = (sp - q.f).norm() / c.tol; const Vector3 n = su.cross(sv); if (q.regular && n.norm() > 0) sc = std::max(sc, angle_deg(n, q.n) / c.angle); if (sc > worst) worst = sc, wq = &q; }
+      if (wq) { Point3 sp; Vector3 su, sv; s.evaluate(wq->uv, sp, su, sv); fprintf(stderr, "region %d round %d poles %ld: worst at (%.6f %.6f): dev %.3g ang %.3g |Fn| n=(%.3f %.3f %.3f) s=(%.3f %.3f %.3f) reg %d\n", r, round, poles, wq->uv.x(), wq->uv.y(), (sp - wq->f).norm(), angle_deg(su.cross(sv), wq->n), wq->n.x(), wq->n.y(), wq->n.z(), su.cross(sv).normalized().x(), su.cross(sv).normalized().y(), su.cross(sv).normalized().z(), wq->regular); }
+    }
+    best.surface = std::move(s);
+    best.position_dev = pos_dev;
+    best.normal_dev = normal_dev;
+    best.within = !failed;
+    if (!failed) return best;
+    auto refine = [](const std::vector<double>& br, const std::vector<char>& mark) {
+      std::vector<double> out;
+      for (size_t i = 0; i + 1 < br.size(); ++i) {
+        out.push_back(br[i]);
+        if (mark[i]) out.push_back(0.5 * (br[i] + br[i + 1]));
+      }
+      out.push_back(br.back());
+      return out;
+    };
+    bu = refine(bu, mark_u);
+    bv = refine(bv, mark_v);
+  }
+  // Not within the tolerance after every round: as over the budget.
+  best.over_budget = true;
+  return best;
+}
+
+// Fits the 3D curve of a trim edge: a clamped B-spline through F at both ends, least squares
+// to F along the straight (u, v) segment, refined until within a quarter of the tolerance.
+struct TrimCurve {
+  BSplineCurve3 curve;
+  double length = 0;
+};
+
+TrimCurve fit_trim_curve(const Context& c, const std::vector<int>& chain, int degree) {
+  const Domain& d = c.spline.domain();
+  const Point2 a = d.vertex(chain.front()), b = d.vertex(chain.back());
+  TrimCurve out;
+  out.length = (b - a).norm();
+  const Vector2 dir = (b - a) / out.length;
+  // Position of each chain vertex along the segment, for choosing the triangle to evaluate in.
+  std::vector<double> at(chain.size());
+  for (size_t i = 0; i < chain.size(); ++i) at[i] = (d.vertex(chain[i]) - a).dot(dir);
+  auto spline_at = [&](double t) {
+    const size_t i = std::min<size_t>(
+        static_cast<size_t>(std::max<long>(std::upper_bound(at.begin(), at.end(), t) - at.begin() - 1, 0)),
+        chain.size() - 2);
+    const int e = d.find_edge(chain[i], chain[i + 1]);
+    const int tri = d.edge_triangles(e)[0];
+    const Point2 u = a + t * dir;
+    return detail::evaluate_in_triangle(c.ev, corners(d, tri), u).position;
+  };
+  const Point3 fa = spline_at(0), fb = spline_at(out.length);
+  const int p = degree;
+  std::vector<double> br = uniform_breaks(0, out.length, static_cast<int>(chain.size()) - 1);
+  for (int round = 0; round < kMaxRounds; ++round) {
+    const std::vector<double> k = detail::clamped_knots(p, br);
+    const int n = static_cast<int>(k.size()) - p - 1;
+    // Unknowns: poles 1 .. n-2; the ends are F at the vertices.
+    const int m = n - 2;
+    std::vector<Point3> poles(static_cast<size_t>(n));
+    poles.front() = fa;
+    poles.back() = fb;
+    if (m > 0) {
+      std::vector<Eigen::Triplet<double>> entries;
+      Eigen::MatrixX3d rhs = Eigen::MatrixX3d::Zero(m, 3);
+      const std::vector<double> ts = inner_points(br, p + 1);
+      for (double t : ts) {
+        const int s = find_span(k, p, t);
+        Basis bs;
+        basis_functions(k, p, s, t, 0, bs);
+        Point3 f = spline_at(t);
+        for (int j = 0; j <= p; ++j) {
+          const int idx = s - p + j;
+          if (idx == 0) f -= bs.value[j] * fa;
+          if (idx == n - 1) f -= bs.value[j] * fb;
+        }
+        for (int j = 0; j <= p; ++j) {
+          const int row = s - p + j - 1;
+          if (row < 0 || row >= m) continue;
+          rhs.row(row) += bs.value[j] * f.transpose();
+          for (int l = 0; l <= p; ++l) {
+            const int col = s - p + l - 1;
+            if (col < 0 || col >= m) continue;
+            entries.emplace_back(row, col, bs.value[j] * bs.value[l]);
+          }
+        }
+      }
+      Eigen::SparseMatrix<double> mat(m, m);
+      mat.setFromTriplets(entries.begin(), entries.end());
+      Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(mat);
+      const Eigen::MatrixX3d x = ldlt.solve(rhs);
+      if (ldlt.info() != Eigen::Success || !x.allFinite())
+        throw SolverError("region faces: the least-squares system of a trim curve could not be solved");
+      for (int i = 0; i < m; ++i) poles[static_cast<size_t>(i) + 1] = x.row(i).transpose();
+    }
+    out.curve = {p, k, poles};
+    // Check between the fit samples, at the breaks and at the chain's vertices.
+    std::vector<double> check = breaks_and_midpoints(br);
+    check.insert(check.end(), at.begin(), at.end());
+    std::vector<char> mark(br.size() - 1, 0);
+    bool failed = false;
+    for (double t : check) {
+      t = std::clamp(t, 0.0, out.length);
+      if ((out.curve.value(t) - spline_at(t)).norm() > kCurveMargin * c.tol) {
+        failed = true;
+        mark[static_cast<size_t>(span_of(br, t))] = 1;
+      }
+    }
+    if (!failed) break;
+    std::vector<double> next;
+    for (size_t i = 0; i + 1 < br.size(); ++i) {
+      next.push_back(br[i]);
+      if (mark[i]) next.push_back(0.5 * (br[i] + br[i + 1]));
+    }
+    next.push_back(br.back());
+    br = std::move(next);
+  }
+  return out;
+}
+
+// Largest distance between the curve and the surface of a face along the segment.
+double trim_gap(const TrimCurve& tc, const BSplineSurface3& s, const Point2& a, const Point2& b) {
+  const int spans = static_cast<int>(tc.curve.knots.size()) - 2 * tc.curve.degree - 1;
+  const int n = std::max(16, 8 * spans);
+  double gap = 0;
+  for (int i = 0; i <= n; ++i) {
+    const double f = static_cast<double>(i) / n;
+    gap = std::max(gap, (tc.curve.value(f * tc.length) - s.value(a + f * (b - a))).norm());
+  }
+  return gap;
+}
+
+}  // namespace
+
+CadRegions make_cad_regions(const Spline& spline, const CadRegionOptions& o) {
+  const Domain& d = spline.domain();
+  if (d.triangle_count() == 0) throw InvalidInput("region faces: the spline has no triangles");
+  if (!(o.tolerance > 0) && !(o.tolerance_abs > 0))
+    throw InvalidInput("region faces: the CAD tolerance must be positive");
+  if (!(o.angle_tolerance > 0 && o.angle_tolerance < 90))
+    throw InvalidInput("region faces: the angle tolerance must be between 0 and 90 degrees");
+  if (o.degree < 2 || o.degree > detail::kMaxBasisDegree)
+    throw InvalidInput("region faces: the face degree must be 2 to 9, not " + std::to_string(o.degree));
+  if (o.max_poles < static_cast<long>(o.degree + 1) * (o.degree + 1))
+    throw InvalidInput("region faces: the pole budget must be at least (degree + 1)^2 = " +
+                       std::to_string((o.degree + 1) * (o.degree + 1)));
+  tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
+  return arena.execute([&] {
+    const Evaluator ev(spline);
+    Regions regions(d);
+    CadRegions out;
+    out.tolerance = o.tolerance_abs > 0 ? o.tolerance_abs : o.tolerance * detail::model_size(spline);
+    out.angle_tolerance = o.angle_tolerance;
+    const auto [extended, left] = regions.extend_creases();
+    out.crease_extensions = extended;
+    out.creases_left_inside = left;
+    regions.label_all();
+    out.smooth_regions = regions.region_count();
+
+    Context c{spline, ev, regions, o, out.tolerance, o.angle_tolerance / 2, {}, {}, {}};
+    c.near_tip.assign(static_cast<size_t>(d.triangle_count()), 0);
+    for (int v : regions.crease_tips())
+      for (int t : d.vertex_triangles(v)) c.near_tip[static_cast<size_t>(t)] = 1;
+    // The check lattice of every triangle, evaluated inside that triangle.
+    const int per = (kLattice + 1) * (kLattice + 2) / 2;
+    c.lattice.resize(static_cast<size_t>(d.triangle_count()) * static_cast<size_t>(per));
+    c.lattice_start.resize(static_cast<size_t>(d.triangle_count()) + 1);
+    for (int t = 0; t <= d.triangle_count(); ++t) c.lattice_start[static_cast<size_t>(t)] = static_cast<size_t>(t) * per;
+    tbb::parallel_for(0, d.triangle_count(), [&](int t) {
+      const auto tri = corners(d, t);
+      size_t k = c.lattice_start[static_cast<size_t>(t)];
+      for (int i = 0; i <= kLattice; ++i)
+        for (int j = 0; j <= kLattice - i; ++j) {
+          const double b1 = static_cast<double>(i) / kLattice, b2 = static_cast<double>(j) / kLattice;
+          const Point2 u = (1 - b1 - b2) * tri[0] + b1 * tri[1] + b2 * tri[2];
+          c.lattice[k++] = make_sample(u, detail::evaluate_in_triangle(ev, tri, u), false);
+        }
+    });
+
+    // Fit every pending region (in parallel); split those over the budget, in label order,
+    // and fit their parts in the next round.
+    std::vector<FitResult> fits;
+    std::vector<int> pending(static_cast<size_t>(regions.region_count()));
+    std::iota(pending.begin(), pending.end(), 0);
+    std::vector<char> final_state;
+    while (!pending.empty()) {
+      fits.resize(static_cast<size_t>(regions.region_count()));
+      tbb::parallel_for(size_t(0), pending.size(), [&](size_t i) {
+        fits[static_cast<size_t>(pending[i])] = fit_region(c, pending[i]);
+      });
+      std::vector<int> next;
+      for (int r : pending) {
+        if (!fits[static_cast<size_t>(r)].over_budget) continue;
+        const int before = regions.region_count();
+        if (regions.split(r)) {
+          ++out.budget_splits;
+          next.push_back(r);
+          for (int k = before; k < regions.region_count(); ++k) next.push_back(k);
+        } else {
+          ++out.unsplittable;
+        }
+      }
+      pending = std::move(next);
+    }
+
+    // Faces.
+    out.faces.resize(static_cast<size_t>(regions.region_count()));
+    bool within = true;
+    for (int r = 0; r < regions.region_count(); ++r) {
+      RegionFace& f = out.faces[static_cast<size_t>(r)];
+      FitResult& fr = fits[static_cast<size_t>(r)];
+      f.surface = std::move(fr.surface);
+      f.triangles = regions.triangles(r);
+      f.max_position_deviation = fr.position_dev;
+      f.max_normal_deviation = fr.normal_dev;
+      f.within_tolerance = fr.within;
+      within = within && fr.within;
+      out.poles += f.surface.poles.size();
+      out.max_position_deviation = std::max(out.max_position_deviation, fr.position_dev);
+      out.max_normal_deviation = std::max(out.max_normal_deviation, fr.normal_dev);
+    }
+
+    // Topological vertices: where the region borders meet, turn, or change their kind or
+    // their pair of faces.
+    std::vector<std::vector<int>> border_at(static_cast<size_t>(d.vertex_count()));
+    for (int e = 0; e < d.edge_count(); ++e)
+      if (regions.is_region_border(e))
+        for (int v : d.edges()[static_cast<size_t>(e)]) border_at[static_cast<size_t>(v)].push_back(e);
+    auto face_pair = [&](int e) {
+      const auto tr = d.edge_triangles(e);
+      const int a = regions.label(tr[0]), b = tr[1] < 0 ? -1 : regions.label(tr[1]);
+      return std::make_pair(std::min(a, b), std::max(a, b));
+    };
+    auto edge_kind = [&](int e) {
+      // Borders made by relabelling only (a split) keep the kind recorded for the edge.
+      return regions.kind(e);
+    };
+    std::vector<int> topo(static_cast<size_t>(d.vertex_count()), -1);
+    auto make_vertex = [&](int v) {
+      if (topo[static_cast<size_t>(v)] >= 0) return;
+      topo[static_cast<size_t>(v)] = static_cast<int>(out.vertex_ids.size());
+      out.vertex_ids.push_back(v);
+    };
+    for (int v = 0; v < d.vertex_count(); ++v) {
+      const auto& be = border_at[static_cast<size_t>(v)];
+      if (be.empty()) continue;
+      if (be.size() != 2) {
+        make_vertex(v);
+        continue;
+      }
+      const int a = regions.other(be[0], v), b = regions.other(be[1], v);
+      const Vector2 x = d.vertex(a) - d.vertex(v), y = d.vertex(b) - d.vertex(v);
+      const bool straight = std::fabs(det3(d.vertex(a), d.vertex(v), d.vertex(b))) <= kCollinear * x.norm() * y.norm() &&
+                            x.dot(y) < 0;
+      if (!straight || face_pair(be[0]) != face_pair(be[1]) || edge_kind(be[0]) != edge_kind(be[1])) make_vertex(v);
+    }
+
+    // Edges: runs of border domain edges between topological vertices, oriented with the
+    // lower-numbered face on the left (boundary runs: the domain on the left).
+    std::map<std::pair<int, int>, std::pair<int, bool>> run_of;  // directed domain edge -> (run, forward)
+    for (int r = 0; r < regions.region_count(); ++r) {
+      for (auto& loop : regions.loops(r)) {
+        // Start at a topological vertex.
+        size_t start = loop.size();
+        for (size_t i = 0; i < loop.size(); ++i)
+          if (topo[static_cast<size_t>(loop[i].from)] >= 0) {
+            start = i;
+            break;
+          }
+        if (start == loop.size()) {
+          make_vertex(loop[0].from);
+          make_vertex(loop[loop.size() / 2].from);
+          start = 0;
+        }
+        std::rotate(loop.begin(), loop.begin() + static_cast<long>(start), loop.end());
+        std::vector<RegionEdgeUse> uses;
+        for (size_t i = 0; i < loop.size();) {
+          const auto key = std::make_pair(loop[i].from, loop[i].to);
+          auto found = run_of.find(key);
+          if (found == run_of.end()) {
+            // A new run, from here to the next topological vertex, with face r on its left.
+            RegionEdge edge;
+            edge.faces[0] = r;
+            const int e = d.find_edge(loop[i].from, loop[i].to);
+            const auto tr = d.edge_triangles(e);
+            if (tr[1] >= 0) edge.faces[1] = regions.label(tr[0]) == r ? regions.label(tr[1]) : regions.label(tr[0]);
+            edge.kind = edge_kind(e);
+            edge.chain.push_back(loop[i].from);
+            const int id = static_cast<int>(out.edges.size());
+            size_t j = i;
+            do {
+              edge.chain.push_back(loop[j].to);
+              run_of[{loop[j].from, loop[j].to}] = {id, true};
+              run_of[{loop[j].to, loop[j].from}] = {id, false};
+              ++j;
+            } while (j < loop.size() && topo[static_cast<size_t>(loop[j].from)] < 0);
+            edge.vertices = {topo[static_cast<size_t>(edge.chain.front())], topo[static_cast<size_t>(edge.chain.back())]};
+            out.edges.push_back(std::move(edge));
+            uses.push_back({id, false});
+            i = j;
+          } else {
+            const auto [id, forward] = found->second;
+            uses.push_back({id, !forward});
+            i += out.edges[static_cast<size_t>(id)].chain.size() - 1;
+          }
+        }
+        out.faces[static_cast<size_t>(r)].loops.push_back(std::move(uses));
+      }
+    }
+
+    // Vertex positions, trim curves and gaps.
+    out.vertices.resize(out.vertex_ids.size());
+    for (int v : out.vertex_ids) out.vertex_parameters.push_back(d.vertex(v));
+    tbb::parallel_for(size_t(0), out.vertex_ids.size(), [&](size_t i) {
+      const int v = out.vertex_ids[i];
+      const int t = d.vertex_triangles(v)[0];
+      out.vertices[i] = detail::evaluate_in_triangle(ev, corners(d, t), d.vertex(v)).position;
+    });
+    tbb::parallel_for(size_t(0), out.edges.size(), [&](size_t i) {
+      RegionEdge& e = out.edges[i];
+      TrimCurve tc = fit_trim_curve(c, e.chain, o.degree);
+      const Point2 a = d.vertex(e.chain.front()), b = d.vertex(e.chain.back());
+      e.gap = 0;
+      for (int f : e.faces)
+        if (f >= 0) e.gap = std::max(e.gap, trim_gap(tc, out.faces[static_cast<size_t>(f)].surface, a, b));
+      e.curve = std::move(tc.curve);
+      e.length = tc.length;
+    });
+    for (const RegionEdge& e : out.edges) out.max_gap = std::max(out.max_gap, e.gap);
+    out.within_tolerance = within && out.unsplittable == 0;
+    return out;
+  });
+}
+
+}  // namespace tbs
