@@ -8,6 +8,7 @@
 #include "bspline_basis.h"
 #include "side_eval.h"
 
+#include <Eigen/CholmodSupport>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <tbb/parallel_for.h>
@@ -19,6 +20,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <numeric>
 #include <queue>
 
@@ -52,12 +54,13 @@ constexpr double kRegular = 1e-2;
 // Thin-plate weights, relative to the data of a cell: tiny inside the region (it only keeps
 // the least-squares system regular where a cell has few samples), stronger outside it, where
 // it alone shapes the surface.
-constexpr double kSmoothInside = 1e-6;
+constexpr double kSmoothInside = 1e-5;
 constexpr double kSmoothOutside = 1e-2;
 // Two segments of a trim chain are one straight edge when the sine of their angle is below
 // this: the straight line then misses the middle vertex by at most 1e-9 of its length.
 constexpr double kCollinear = 1e-9;
 constexpr int kMaxRounds = 14;
+constexpr double kNormalStall = 0.75;
 // The rectangle of a face reaches this fraction of its size past the region, so that no trim
 // lies on the surface's own boundary.
 constexpr double kMargin = 2e-3;
@@ -201,7 +204,10 @@ class Regions {
   // Cuts region r along a chain of domain edges across its longer side, through vertices
   // that are on no border, from its outer loop to its outer loop. The parts get new labels
   // (the part with the smallest triangle keeps r). Returns false if there is no such chain.
-  bool split(int r) {
+  // The cut runs near the worst point of the last fit (`worst`, if inside the region's box),
+  // a little past it toward the middle, so that repeated splits close in on a spot that
+  // needs many knots instead of halving the whole region each time.
+  bool split(int r, const Point2& worst) {
     const std::vector<int> tris = members_[static_cast<size_t>(r)];
     if (tris.size() < 2) return false;
     Box2 box;
@@ -210,7 +216,14 @@ class Regions {
     const Vector2 ext = box.max - box.min;
     for (int attempt = 0; attempt < 2; ++attempt) {
       const int axis = (ext.x() >= ext.y()) == (attempt == 0) ? 0 : 1;
-      if (cut_across(r, tris, box, axis)) return true;
+      const double a = box.min[axis], b = box.max[axis], length = b - a, centre = 0.5 * (a + b);
+      double at = centre;
+      if (worst.allFinite() && worst[axis] >= a && worst[axis] <= b) {
+        const double toward = worst[axis] < centre ? 1.0 : -1.0;
+        at = std::clamp(worst[axis] + toward * 0.15 * length, a + 0.1 * length, b - 0.1 * length);
+        if (std::fabs(worst[axis] - centre) < 0.15 * length) at = centre;
+      }
+      if (cut_across(r, tris, box, axis, at)) return true;
     }
     return false;
   }
@@ -314,9 +327,8 @@ class Regions {
     std::sort(m.begin(), m.end());
   }
 
-  bool cut_across(int r, const std::vector<int>& tris, const Box2& box, int axis) {
+  bool cut_across(int r, const std::vector<int>& tris, const Box2& box, int axis, double mid) {
     const int across = 1 - axis;
-    const double mid = 0.5 * (box.min[axis] + box.max[axis]);
     const double extent = std::max(box.max[axis] - box.min[axis], 1e-300);
     const std::vector<std::vector<HalfEdge>> lp = loops(r);
     if (lp.empty()) return false;
@@ -490,10 +502,24 @@ class TensorSystem {
       }
     Eigen::SparseMatrix<double> a(pole_count(), pole_count());
     a.setFromTriplets(entries.begin(), entries.end());
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt(a);
-    if (ldlt.info() != Eigen::Success) return {};
-    const Eigen::MatrixX3d x = ldlt.solve(rhs_);
-    if (ldlt.info() != Eigen::Success || !x.allFinite()) return {};
+    // CHOLMOD's supernodal factorization: the pole grid is a 2D stencil of (2p+1)^2 entries per
+    // row, where Eigen's simplicial LDLT spent 70 % of a region fit.
+    // One factorization at a time: CHOLMOD's supernodal kernels call BLAS, and a single-threaded
+    // BLAS (Debian's libopenblas0-serial, say) is not safe to call from two threads at once;
+    // concurrent calls gave different results from run to run.
+    static std::mutex blas;
+    std::lock_guard lock(blas);
+    Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> chol;
+    chol.setMode(Eigen::CholmodSupernodalLLt);
+    chol.cholmod().print = 0;  // a failed factorization is handled by the caller, not printed
+    // AMD only: METIS orderings differ from run to run, and so would the rounding of the
+    // solution, and with it which knots get inserted.
+    chol.cholmod().nmethods = 1;
+    chol.cholmod().method[0].ordering = CHOLMOD_AMD;
+    chol.compute(a);
+    if (chol.info() != Eigen::Success) return {};
+    const Eigen::MatrixX3d x = chol.solve(rhs_);
+    if (chol.info() != Eigen::Success || !x.allFinite()) return {};
     std::vector<Point3> poles(static_cast<size_t>(pole_count()));
     for (int k = 0; k < pole_count(); ++k) poles[static_cast<size_t>(k)] = x.row(k).transpose();
     return poles;
@@ -578,6 +604,9 @@ struct FitResult {
   double normal_dev = 0;
   bool within = false;
   bool over_budget = false;
+  bool normals_stalled = false;
+  // Where the last fit missed the position tolerance by the most (NaN if nowhere).
+  Point2 worst = Point2::Constant(std::numeric_limits<double>::quiet_NaN());
 };
 
 std::vector<double> uniform_breaks(double a, double b, int spans) {
@@ -705,6 +734,7 @@ FitResult fit_region(const Context& c, int r) {
   const double derivative_weight = slope > 0 ? (c.tol / slope) * (c.tol / slope) : 0.0;
 
   FitResult best;
+  std::vector<double> normal_history;
   for (int round = 0; round < kMaxRounds; ++round) {
     const long poles = static_cast<long>(bu.size() - 1 + static_cast<size_t>(p)) *
                        static_cast<long>(bv.size() - 1 + static_cast<size_t>(p));
@@ -724,21 +754,42 @@ FitResult fit_region(const Context& c, int r) {
     std::vector<Sample> fit;
     grid_samples(c, r, inner_points(bu, std::min(p, 3)), inner_points(bv, std::min(p, 3)), true, fit);
     border_samples(c, border, min_span / (p + 1), 0.0, fit);
-    TensorSystem sys(p, s.knots_u, s.knots_v);
-    for (const Sample& q : fit) sys.add_sample(q.uv, q.f, q.fu, q.fv, derivative_weight);
     // Thin plate per cell: relative to the data a cell holds, 4 x 4 samples.
     const double per_cell = 16;
+    std::vector<double> lambda;
     for (size_t j = 0; j + 1 < bv.size(); ++j)
       for (size_t i = 0; i + 1 < bu.size(); ++i) {
         const double hu = bu[i + 1] - bu[i], hv = bv[j + 1] - bv[j], hm = std::max(hu, hv);
         const Point2 centre(0.5 * (bu[i] + bu[i + 1]), 0.5 * (bv[j] + bv[j + 1]));
         const int t = c.ev.locate(centre);
         const bool inside = t >= 0 && c.regions.label(t) == r;
-        const double lambda = (inside ? kSmoothInside : kSmoothOutside) * per_cell * hm * hm * hm * hm / (hu * hv);
-        sys.add_thin_plate(static_cast<int>(i), static_cast<int>(j), lambda);
+        lambda.push_back((inside ? kSmoothInside : kSmoothOutside) * per_cell * hm * hm * hm * hm / (hu * hv));
       }
-    s.poles = sys.solve();
-    if (s.poles.empty()) throw SolverError("region faces: the least-squares system of a region could not be solved");
+    // A system that cannot be factored, or whose solution misses its own samples by far more
+    // than the last round's surface did (rounding on a nearly singular system), is solved again
+    // with a stronger thin plate.
+    const double bound = 10 * std::max(best.position_dev, c.tol);
+    for (double scale : {1.0, 1e2, 1e4}) {
+      TensorSystem sys(p, s.knots_u, s.knots_v);
+      for (const Sample& q : fit) sys.add_sample(q.uv, q.f, q.fu, q.fv, derivative_weight);
+      size_t k = 0;
+      for (size_t j = 0; j + 1 < bv.size(); ++j)
+        for (size_t i = 0; i + 1 < bu.size(); ++i)
+          sys.add_thin_plate(static_cast<int>(i), static_cast<int>(j), scale * lambda[k++]);
+      s.poles = sys.solve();
+      if (s.poles.empty()) continue;
+      double miss = 0;
+      for (const Sample& q : fit) miss = std::max(miss, (s.value(q.uv) - q.f).norm());
+      if (miss <= bound) break;
+      s.poles.clear();
+    }
+    if (s.poles.empty()) {
+      // Keep the last round's surface: it is what the result says it is.
+      if (best.surface.poles.empty())
+        throw SolverError("region faces: the least-squares system of a region could not be solved");
+      best.over_budget = false;
+      return best;
+    }
 
     // Check samples: breaks and midpoints of the grid, the border between the fit samples,
     // and the triangle lattices.
@@ -749,6 +800,13 @@ FitResult fit_region(const Context& c, int r) {
     double pos_dev = 0, normal_dev = 0;
     std::vector<char> mark_u(bu.size() - 1, 0), mark_v(bv.size() - 1, 0);
     bool failed = false;
+    // Normals that two rounds of refinement did not bring below kNormalStall of what they were
+    // turn faster than a face can follow (near a cone's tip, a fold, the end of a crease): they
+    // no longer drive refinement, and the result says by how much they miss.
+    double worst_dev = 0;
+    Point2 worst_uv = Point2::Constant(std::numeric_limits<double>::quiet_NaN());
+    const size_t nh = normal_history.size();
+    const bool normals_stalled = nh >= 3 && normal_history[nh - 1] > kNormalStall * normal_history[nh - 3];
     for (const Sample& q : check) {
       Point3 sp;
       Vector3 su, sv;
@@ -759,7 +817,11 @@ FitResult fit_region(const Context& c, int r) {
       if (q.regular && n.norm() > 0) ang = angle_deg(n, q.n);
       pos_dev = std::max(pos_dev, dev);
       normal_dev = std::max(normal_dev, ang);
-      if (dev > kPositionMargin * c.tol || ang > kNormalMargin * c.angle) {
+      if (dev > kPositionMargin * c.tol && dev > worst_dev) {
+        worst_dev = dev;
+        worst_uv = q.uv;
+      }
+      if (dev > kPositionMargin * c.tol || (!normals_stalled && ang > kNormalMargin * c.angle)) {
         failed = true;
         const int iu = span_of(bu, q.uv.x()), jv = span_of(bv, q.uv.y());
         // Refine the direction in which the cell is long on the surface.
@@ -777,8 +839,11 @@ FitResult fit_region(const Context& c, int r) {
     best.surface = std::move(s);
     best.position_dev = pos_dev;
     best.normal_dev = normal_dev;
-    best.within = !failed;
+    best.within = !failed && normal_dev <= c.angle && pos_dev <= c.tol;
+    best.normals_stalled = normals_stalled;
+    best.worst = worst_uv;
     if (!failed) return best;
+    normal_history.push_back(normal_dev);
     auto refine = [](const std::vector<double>& br, const std::vector<char>& mark) {
       std::vector<double> out;
       for (size_t i = 0; i + 1 < br.size(); ++i) {
@@ -964,7 +1029,7 @@ CadRegions make_cad_regions(const Spline& spline, const CadRegionOptions& o) {
       for (int r : pending) {
         if (!fits[static_cast<size_t>(r)].over_budget) continue;
         const int before = regions.region_count();
-        if (regions.split(r)) {
+        if (regions.split(r, fits[static_cast<size_t>(r)].worst)) {
           ++out.budget_splits;
           next.push_back(r);
           for (int k = before; k < regions.region_count(); ++k) next.push_back(k);
@@ -986,6 +1051,7 @@ CadRegions make_cad_regions(const Spline& spline, const CadRegionOptions& o) {
       f.max_position_deviation = fr.position_dev;
       f.max_normal_deviation = fr.normal_dev;
       f.within_tolerance = fr.within;
+      out.normal_stalls += fr.normals_stalled ? 1 : 0;
       within = within && fr.within;
       out.poles += f.surface.poles.size();
       out.max_position_deviation = std::max(out.max_position_deviation, fr.position_dev);

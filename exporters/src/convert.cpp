@@ -247,6 +247,14 @@ void convert_cad(const SplineFile& file, const std::string& output, const Conver
       r.warnings.push_back(std::to_string(c.creases_left_inside) +
                            " crease(s) end inside a face (no chain of domain edges reached a border): the face "
                            "approximates the crease");
+    if (c.normal_stalls > 0) {
+      std::snprintf(line, sizeof line,
+                    "the normals of %d face(s) differ from the spline's by up to %.3g degrees (limit %.3g) along "
+                    "shared borders where the spline's normal turns faster than a face can follow (a cone's tip, a "
+                    "fold)",
+                    c.normal_stalls, c.max_normal_deviation, o.angle_tolerance / 2);
+      r.warnings.push_back(line);
+    }
     if (c.unsplittable > 0) {
       std::snprintf(line, sizeof line,
                     "%d region(s) needed more than --max-poles %ld poles and could not be split further; they "
@@ -302,7 +310,8 @@ void convert_cad(const SplineFile& file, const std::string& output, const Conver
     r.kind = std::to_string(x.pieces.size()) + " exact Bezier pieces, degree " + std::to_string(x.degree);
     r.cad = write(x);
   }
-  if (r.deviations_measured && !r.within_tolerance && o.faces == CadFaceForm::Regions) {
+  if (r.deviations_measured && !r.within_tolerance && o.faces == CadFaceForm::Regions &&
+      r.max_position_deviation > r.tolerance) {
     std::snprintf(line, sizeof line, "the faces are up to %.3g from the spline (tolerance %.3g) and their normals up to %.3g degrees (limit %.3g)",
                   r.max_position_deviation, r.tolerance, r.max_normal_deviation, r.normal_limit);
     r.warnings.push_back(line);

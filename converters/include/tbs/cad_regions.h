@@ -137,6 +137,11 @@ struct CadRegions {
   /// Regions over the budget that could not be split (a single triangle, or no chain of
   /// domain edges across): they keep the budget's poles and may miss the tolerance.
   int unsplittable = 0;
+  /// Faces whose normals, along a shared border, two rounds of refinement did not bring
+  /// below 3/4 of what they were: the spline's normal turns faster there than a face can
+  /// follow (near the tip of a cone, at a fold). Refinement stops for the normals there;
+  /// max_normal_deviation says by how much the limit is missed.
+  int normal_stalls = 0;
   size_t poles = 0;                   ///< Poles of all faces.
   double max_position_deviation = 0;  ///< Over all faces (model units).
   double max_normal_deviation = 0;    ///< Degrees, over all shared borders.
