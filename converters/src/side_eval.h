@@ -16,7 +16,9 @@ SurfacePoint evaluate_toward(const Evaluator& ev, const Point2& u, const Point2&
                              const Point2& second, Point2* used = nullptr);
 
 // F at a point u of the triangle `tri` (closed), on the side of its interior: toward its
-// centroid, ties broken toward the corner farthest from that line.
+// centroid, ties broken toward the corner farthest from that line. Within a barycentric 1e-5
+// of an edge, the derivatives are those at the point 1e-5 inside on the way to the centroid
+// (see side_eval.cpp); the position is always F(u).
 SurfacePoint evaluate_in_triangle(const Evaluator& ev, const std::array<Point2, 3>& tri, const Point2& u);
 
 // The model size the relative tolerances refer to: the diagonal of the control points'
