@@ -38,8 +38,8 @@ void print_summary(const ConvertOptions& o, const ConvertReport& r) {
                 static_cast<double>(r.file_bytes) / 1e6);
     std::printf("%-18s %s\n", "content", r.kind.c_str());
     if (r.faces_form == "regions")
-      std::printf("%-18s %zu smooth, %zu crease extension(s), %zu split(s) for the pole budget\n", "regions",
-                  r.smooth_regions, r.crease_extensions, r.budget_splits);
+      std::printf("%-18s %zu smooth, %zu crease extension(s), %zu split(s) and %zu island(s) for the pole budget\n",
+                  "regions", r.smooth_regions, r.crease_extensions, r.budget_splits, r.islands);
     std::printf("%-18s %zu B-spline faces, %zu shell%s, %zu edges, %zu free edges in %zu loop%s\n", "shape",
                 r.cad.faces, r.cad.shells, r.cad.shells == 1 ? "" : "s", r.cad.edges, r.cad.free_edges,
                 r.cad.free_loops, r.cad.free_loops == 1 ? "" : "s");

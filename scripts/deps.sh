@@ -1,5 +1,7 @@
 # Shared by scripts/test.sh and scripts/demo.sh: the Debian packages tbs needs, installed when
 # missing. Source it, then call `tbs_install_deps [extra packages...]`.
+# libopenblas0-serial: CHOLMOD's supernodal factorization (region faces, LSCM) runs on BLAS;
+# without it Debian's reference BLAS takes half of a region-face export.
 
 TBS_PACKAGES=(
   build-essential cmake pkg-config
@@ -8,6 +10,7 @@ TBS_PACKAGES=(
   libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
   libocct-data-exchange-dev libocct-ocaf-dev libocct-visualization-dev
   libtinygltf-dev libstb-dev libopenexr-dev
+  libopenblas0-serial
 )
 TBS_TEST_PACKAGES=(libgtest-dev libgmock-dev libbenchmark-dev python3 python3-jsonschema libcgal-demo
   freecad-python3 clang libclang-rt-14-dev pybind11-dev python3-dev python3-numpy)

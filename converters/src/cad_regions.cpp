@@ -225,7 +225,65 @@ class Regions {
       }
       if (cut_across(r, tris, box, axis, at)) return true;
     }
+    // No chain there (the ends found on the outer loop can lie on the same side of a region
+    // that is not convex): other places across either side.
+    for (double f : {0.5, 0.3, 0.7, 0.15, 0.85})
+      for (int axis : {0, 1})
+        if (cut_across(r, tris, box, axis, box.min[axis] + f * (box.max[axis] - box.min[axis]))) return true;
     return false;
+  }
+
+  // Cuts the triangles of region r that share a vertex with triangle t out of r, as a region
+  // of their own (an island; the rest may fall apart into several regions). Refused (false)
+  // when they are not much smaller than r, or when a new border would pinch a region at a
+  // vertex (a loop through the same vertex twice).
+  bool carve(int r, int t) {
+    const std::vector<int> tris = members_[static_cast<size_t>(r)];
+    if (label_[static_cast<size_t>(t)] != r || tris.size() < 8) return false;
+    std::vector<int> island;
+    for (int v : d_.triangle(t))
+      for (int u : d_.vertex_triangles(v))
+        if (label_[static_cast<size_t>(u)] == r) island.push_back(u);
+    std::sort(island.begin(), island.end());
+    island.erase(std::unique(island.begin(), island.end()), island.end());
+    if (4 * island.size() > tris.size()) return false;
+    std::vector<char> in(static_cast<size_t>(d_.triangle_count()), 0);
+    for (int u : island) in[static_cast<size_t>(u)] = 1;
+    std::vector<int> cut;
+    for (int u : island)
+      for (int k = 0; k < 3; ++k) {
+        const int e = d_.triangle_edge(u, k);
+        const auto tr = d_.edge_triangles(e);
+        const int across = tr[0] == u ? tr[1] : tr[0];
+        if (across < 0 || border_[static_cast<size_t>(e)] || in[static_cast<size_t>(across)] ||
+            label_[static_cast<size_t>(across)] != r)
+          continue;
+        border_[static_cast<size_t>(e)] = 1;
+        cut.push_back(e);
+      }
+    const std::vector<int> old_labels = label_;
+    const size_t old_count = members_.size();
+    relabel(r, tris);
+    // No pinch: every vertex of the cut is passed once by each region's border.
+    bool simple = true;
+    for (int q = r; simple && q < region_count(); q = q == r ? static_cast<int>(old_count) : q + 1) {
+      std::map<int, int> passes;
+      for (const HalfEdge& h : border_half_edges(q)) ++passes[h.from];
+      for (int e : cut)
+        for (int v : d_.edges()[static_cast<size_t>(e)]) {
+          const auto it = passes.find(v);
+          if (it != passes.end() && it->second > 1) simple = false;
+        }
+    }
+    if (!simple) {
+      for (int e : cut) border_[static_cast<size_t>(e)] = 0;
+      label_ = old_labels;
+      members_.resize(old_count);
+      members_[static_cast<size_t>(r)] = tris;
+      return false;
+    }
+    for (int e : cut) kind_[static_cast<size_t>(e)] = RegionEdgeKind::Split;
+    return true;
   }
 
   // Domain edges on the border of region r (one per half-edge: the region is on its left):
@@ -327,31 +385,23 @@ class Regions {
     std::sort(m.begin(), m.end());
   }
 
+  // Cuts region r along a chain of domain edges from a vertex of its outer loop on the low
+  // side (across the axis) to one on the high side, through vertices on no border, close to
+  // the line axis = mid: the cheapest such chain, where an edge costs its length times
+  // (1 + 20 x its distance from the line / the region's extent) and each end its distance
+  // from the line times 20.
   bool cut_across(int r, const std::vector<int>& tris, const Box2& box, int axis, double mid) {
     const int across = 1 - axis;
     const double extent = std::max(box.max[axis] - box.min[axis], 1e-300);
+    const double centre = 0.5 * (box.min[across] + box.max[across]);
     const std::vector<std::vector<HalfEdge>> lp = loops(r);
     if (lp.empty()) return false;
     std::vector<char> outer(static_cast<size_t>(d_.vertex_count()), 0), on_border(outer.size(), 0);
     for (const auto& l : lp)
       for (const HalfEdge& h : l) on_border[static_cast<size_t>(h.from)] = 1;
     for (const HalfEdge& h : lp[0]) outer[static_cast<size_t>(h.from)] = 1;
-    // From the outer vertex nearest to the middle of the low side to the one nearest to the
-    // middle of the high side.
-    auto nearest = [&](double side) {
-      int best = -1;
-      double bd = std::numeric_limits<double>::infinity();
-      for (const HalfEdge& h : lp[0]) {
-        Point2 target;
-        target[axis] = mid;
-        target[across] = side;
-        const double dd = (d_.vertex(h.from) - target).norm();
-        if (dd < bd) bd = dd, best = h.from;
-      }
-      return best;
-    };
-    const int s = nearest(box.min[across]), goal = nearest(box.max[across]);
-    if (s < 0 || goal < 0 || s == goal) return false;
+    auto side = [&](int v) { return d_.vertex(v)[across] < centre ? 0 : 1; };
+    auto end_cost = [&](int v) { return 20 * std::fabs(d_.vertex(v)[axis] - mid); };
     std::vector<char> in_region(static_cast<size_t>(d_.triangle_count()), 0);
     for (int t : tris) in_region[static_cast<size_t>(t)] = 1;
     auto inner_edge = [&](int e) {
@@ -360,43 +410,62 @@ class Regions {
              !border_[static_cast<size_t>(e)];
     };
     std::vector<double> dist(outer.size(), std::numeric_limits<double>::infinity());
-    std::vector<int> from(outer.size(), -1);
+    std::vector<int> from(outer.size(), -1), source(outer.size(), -1);
     using Item = std::pair<double, int>;
     std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
-    dist[static_cast<size_t>(s)] = 0;
-    queue.push({0.0, s});
-    bool found = false;
+    for (const HalfEdge& h : lp[0])
+      if (side(h.from) == 0 && end_cost(h.from) < dist[static_cast<size_t>(h.from)]) {
+        dist[static_cast<size_t>(h.from)] = end_cost(h.from);
+        source[static_cast<size_t>(h.from)] = h.from;
+        queue.push({dist[static_cast<size_t>(h.from)], h.from});
+      }
+    int goal = -1;
+    double best = std::numeric_limits<double>::infinity();
     while (!queue.empty()) {
       const auto [dv, a] = queue.top();
       queue.pop();
+      if (dv >= best) break;
       if (dv > dist[static_cast<size_t>(a)]) continue;
-      if (a == goal) {
-        found = true;
-        break;
-      }
-      if (a != s && on_border[static_cast<size_t>(a)]) continue;
+      if (source[static_cast<size_t>(a)] != a && on_border[static_cast<size_t>(a)]) continue;
       for (int e : vertex_edges(a)) {
         if (!inner_edge(e)) continue;
         const int b = other(e, a);
-        if (on_border[static_cast<size_t>(b)] && b != goal) continue;
         const Point2 &pa = d_.vertex(a), &pb = d_.vertex(b);
         const double off = 0.5 * (std::fabs(pa[axis] - mid) + std::fabs(pb[axis] - mid)) / extent;
         const double nd = dv + (pb - pa).norm() * (1 + 20 * off);
+        if (on_border[static_cast<size_t>(b)]) {
+          // An end on the high side of the outer loop (not back where the chain began).
+          if (outer[static_cast<size_t>(b)] && side(b) == 1 && nd + end_cost(b) < best) {
+            best = nd + end_cost(b);
+            goal = b;
+            from[static_cast<size_t>(b)] = e;
+            source[static_cast<size_t>(b)] = source[static_cast<size_t>(a)];
+          }
+          continue;
+        }
         if (nd < dist[static_cast<size_t>(b)]) {
           dist[static_cast<size_t>(b)] = nd;
           from[static_cast<size_t>(b)] = e;
+          source[static_cast<size_t>(b)] = source[static_cast<size_t>(a)];
           queue.push({nd, b});
         }
       }
     }
-    if (!found) return false;
+    if (goal < 0) return false;
+    const int s = source[static_cast<size_t>(goal)];
     for (int b = goal; b != s;) {
       const int e = from[static_cast<size_t>(b)];
       border_[static_cast<size_t>(e)] = 1;
       kind_[static_cast<size_t>(e)] = RegionEdgeKind::Split;
       b = other(e, b);
     }
-    // Relabel: the part with the smallest triangle keeps r, the other parts get new labels.
+    relabel(r, tris);
+    return true;
+  }
+
+  // Labels the triangles `tris` of region r after new borders were drawn: the part with the
+  // smallest triangle keeps r, the other parts get new labels.
+  void relabel(int r, const std::vector<int>& tris) {
     for (int t : tris) label_[static_cast<size_t>(t)] = -2;
     bool first = true;
     for (int t : tris) {
@@ -404,7 +473,6 @@ class Regions {
       flood(t, first ? r : static_cast<int>(members_.size()), -2);
       first = false;
     }
-    return true;
   }
 
   const Domain& d_;
@@ -607,6 +675,12 @@ struct FitResult {
   bool normals_stalled = false;
   // Where the last fit missed the position tolerance by the most (NaN if nowhere).
   Point2 worst = Point2::Constant(std::numeric_limits<double>::quiet_NaN());
+  // Over the budget by projection: the last rounds' convergence says that the tolerances need
+  // more than the budget (fit_region(), `early`).
+  bool projected = false;
+  // The worst spot stayed put while the error fell more slowly than the pole count grew: the
+  // spline turns there faster than elsewhere in the region (a fold, a cone's tip).
+  bool slow_spot = false;
 };
 
 std::vector<double> uniform_breaks(double a, double b, int spans) {
@@ -688,7 +762,16 @@ std::vector<double> inner_points(const std::vector<double>& br, int p) {
   return out;
 }
 
-FitResult fit_region(const Context& c, int r) {
+// Stops refining a region whose last two rounds project a need of more than this many times
+// the pole budget (the error falling as a power of the pole count).
+constexpr double kProjectedOver = 4.0;
+// Below this rate (error ~ poles^-rate) at a spot that stays put, the spot is carved out of its
+// region: smooth parts converge at about poles^-(p+1)/2, a kink at poles^-1/2.
+constexpr double kSlowRate = 1.0;
+
+// Fits region r. With `early`, stops as soon as the last rounds project a pole count over
+// kProjectedOver times the budget (the caller then splits the region).
+FitResult fit_region(const Context& c, int r, bool early) {
   const Domain& d = c.spline.domain();
   const std::vector<int>& tris = c.regions.triangles(r);
   const int p = c.o.degree;
@@ -735,6 +818,12 @@ FitResult fit_region(const Context& c, int r) {
 
   FitResult best;
   std::vector<double> normal_history;
+  struct Round {
+    long poles;
+    double badness;  // the largest deviation over its limit (with the margins)
+    Point2 worst;
+  };
+  std::vector<Round> rounds;
   for (int round = 0; round < kMaxRounds; ++round) {
     const long poles = static_cast<long>(bu.size() - 1 + static_cast<size_t>(p)) *
                        static_cast<long>(bv.size() - 1 + static_cast<size_t>(p));
@@ -831,11 +920,6 @@ FitResult fit_region(const Context& c, int r) {
         if (lv >= 0.5 * lu) mark_v[static_cast<size_t>(jv)] = 1;
       }
     }
-    if (getenv("TBS_DEBUG_REGIONS")) {
-      double worst = 0; const Sample* wq = nullptr;
-      for (const Sample& q : check) { Point3 sp; Vector3 su, sv; s.evaluate(q.uv, sp, su, sv); double sc = (sp - q.f).norm() / c.tol; const Vector3 n = su.cross(sv); if (q.regular && n.norm() > 0) sc = std::max(sc, angle_deg(n, q.n) / c.angle); if (sc > worst) worst = sc, wq = &q; }
-      if (wq) { Point3 sp; Vector3 su, sv; s.evaluate(wq->uv, sp, su, sv); fprintf(stderr, "region %d round %d poles %ld: worst at (%.6f %.6f): dev %.3g ang %.3g |Fn| n=(%.3f %.3f %.3f) s=(%.3f %.3f %.3f) reg %d\n", r, round, poles, wq->uv.x(), wq->uv.y(), (sp - wq->f).norm(), angle_deg(su.cross(sv), wq->n), wq->n.x(), wq->n.y(), wq->n.z(), su.cross(sv).normalized().x(), su.cross(sv).normalized().y(), su.cross(sv).normalized().z(), wq->regular); }
-    }
     best.surface = std::move(s);
     best.position_dev = pos_dev;
     best.normal_dev = normal_dev;
@@ -844,6 +928,31 @@ FitResult fit_region(const Context& c, int r) {
     best.worst = worst_uv;
     if (!failed) return best;
     normal_history.push_back(normal_dev);
+    const double badness = std::max(pos_dev / (kPositionMargin * c.tol),
+                                    normals_stalled ? 0.0 : normal_dev / (kNormalMargin * c.angle));
+    rounds.push_back({poles, badness, worst_uv});
+    if (early && rounds.size() >= 3) {
+      // error ~ poles^-rate between rounds; the poles that the tolerances need at the better
+      // of the last two rates.
+      auto rate = [](const Round& a, const Round& b) {
+        return b.poles > a.poles && a.badness > b.badness
+                   ? std::log(a.badness / b.badness) / std::log(static_cast<double>(b.poles) / a.poles)
+                   : 0.0;
+      };
+      const size_t n = rounds.size();
+      const double best_rate = std::max(rate(rounds[n - 3], rounds[n - 2]), rate(rounds[n - 2], rounds[n - 1]));
+      const double need = best_rate > 0 ? static_cast<double>(poles) * std::pow(badness, 1 / best_rate)
+                                        : std::numeric_limits<double>::infinity();
+      if (need > kProjectedOver * static_cast<double>(c.o.max_poles)) {
+        best.over_budget = best.projected = true;
+        bool still = true;
+        for (size_t k = n - 3; k + 1 < n; ++k)
+          still = still && rounds[k].worst.allFinite() && rounds[n - 1].worst.allFinite() &&
+                  (rounds[k].worst - rounds[n - 1].worst).norm() <= 2 * h;
+        best.slow_spot = still && best_rate < kSlowRate;
+        return best;
+      }
+    }
     auto refine = [](const std::vector<double>& br, const std::vector<char>& mark) {
       std::vector<double> out;
       for (size_t i = 0; i + 1 < br.size(); ++i) {
@@ -858,6 +967,18 @@ FitResult fit_region(const Context& c, int r) {
   }
   // Not within the tolerance after every round: as over the budget.
   best.over_budget = true;
+  return best;
+}
+
+// The triangle of `tris` whose centroid is nearest to u.
+int nearest_triangle(const Domain& d, const std::vector<int>& tris, const Point2& u) {
+  int best = tris.front();
+  double bd = std::numeric_limits<double>::infinity();
+  for (int t : tris) {
+    const auto c = corners(d, t);
+    const double dd = ((c[0] + c[1] + c[2]) / 3.0 - u).squaredNorm();
+    if (dd < bd) bd = dd, best = t;
+  }
   return best;
 }
 
@@ -1019,23 +1140,34 @@ CadRegions make_cad_regions(const Spline& spline, const CadRegionOptions& o) {
     std::vector<FitResult> fits;
     std::vector<int> pending(static_cast<size_t>(regions.region_count()));
     std::iota(pending.begin(), pending.end(), 0);
-    std::vector<char> final_state;
+    // Regions that can be split no further: fitted to the whole budget, without projection.
+    std::vector<char> to_budget(pending.size(), 0);
     while (!pending.empty()) {
       fits.resize(static_cast<size_t>(regions.region_count()));
+      to_budget.resize(fits.size(), 0);
       tbb::parallel_for(size_t(0), pending.size(), [&](size_t i) {
-        fits[static_cast<size_t>(pending[i])] = fit_region(c, pending[i]);
+        const int r = pending[i];
+        fits[static_cast<size_t>(r)] = fit_region(c, r, !to_budget[static_cast<size_t>(r)]);
       });
       std::vector<int> next;
       for (int r : pending) {
-        if (!fits[static_cast<size_t>(r)].over_budget) continue;
+        const FitResult& f = fits[static_cast<size_t>(r)];
+        if (!f.over_budget) continue;
         const int before = regions.region_count();
-        if (regions.split(r, fits[static_cast<size_t>(r)].worst)) {
+        if (f.slow_spot && regions.carve(r, nearest_triangle(d, regions.triangles(r), f.worst))) {
+          ++out.islands;
+        } else if (regions.split(r, f.worst)) {
           ++out.budget_splits;
+        } else if (f.projected) {
+          to_budget[static_cast<size_t>(r)] = 1;
           next.push_back(r);
-          for (int k = before; k < regions.region_count(); ++k) next.push_back(k);
+          continue;
         } else {
           ++out.unsplittable;
+          continue;
         }
+        next.push_back(r);
+        for (int k = before; k < regions.region_count(); ++k) next.push_back(k);
       }
       pending = std::move(next);
     }

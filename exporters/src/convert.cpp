@@ -231,6 +231,7 @@ void convert_cad(const SplineFile& file, const std::string& output, const Conver
     r.crease_extensions = static_cast<size_t>(c.crease_extensions);
     r.creases_left_inside = static_cast<size_t>(c.creases_left_inside);
     r.budget_splits = static_cast<size_t>(c.budget_splits);
+    r.islands = static_cast<size_t>(c.islands);
     r.unsplittable = static_cast<size_t>(c.unsplittable);
     r.poles = c.poles;
     r.deviations_measured = true;
@@ -406,6 +407,7 @@ std::string to_json(const ConvertReport& r) {
                       {"crease_extensions", r.crease_extensions},
                       {"creases_left_inside", r.creases_left_inside},
                       {"budget_splits", r.budget_splits},
+                      {"islands", r.islands},
                       {"unsplittable", r.unsplittable},
                       {"poles", r.poles}};
     } else {

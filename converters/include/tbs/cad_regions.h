@@ -134,6 +134,10 @@ struct CadRegions {
   int creases_left_inside = 0;
   /// Regions split because they needed more poles than CadRegionOptions::max_poles.
   int budget_splits = 0;
+  /// Small regions cut out around a spot where the spline turns much faster than in the rest
+  /// of its region (a fold, a cone's tip): the triangles around the spot, as their own face,
+  /// so that the knots that spot needs do not run across the whole region.
+  int islands = 0;
   /// Regions over the budget that could not be split (a single triangle, or no chain of
   /// domain edges across): they keep the budget's poles and may miss the tolerance.
   int unsplittable = 0;

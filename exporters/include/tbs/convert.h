@@ -87,7 +87,7 @@ struct ConvertReport {
   double max_normal_deviation = 0;    ///< Degrees.
   bool within_tolerance = true;
   size_t regions = 0, smooth_regions = 0, crease_extensions = 0, creases_left_inside = 0, budget_splits = 0,
-         unsplittable = 0, poles = 0;
+         islands = 0, unsplittable = 0, poles = 0;
   size_t patches = 0;  ///< Triangle patches or exact pieces.
   CadExportReport cad;
   // Meshes.
