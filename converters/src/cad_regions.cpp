@@ -1052,8 +1052,11 @@ TrimCurve fit_trim_curve(const Context& c, const std::vector<int>& chain, int de
       for (int i = 0; i < m; ++i) poles[static_cast<size_t>(i) + 1] = x.row(i).transpose();
     }
     out.curve = {p, k, poles};
-    // Check between the fit samples, at the breaks and at the chain's vertices.
+    // Check between the fit samples (2p + 2 points per span), at the breaks and at the
+    // chain's vertices.
     std::vector<double> check = breaks_and_midpoints(br);
+    const std::vector<double> between = inner_points(br, 2 * p + 1);
+    check.insert(check.end(), between.begin(), between.end());
     check.insert(check.end(), at.begin(), at.end());
     std::vector<char> mark(br.size() - 1, 0);
     bool failed = false;

@@ -109,6 +109,8 @@ void expect_within_tolerance(const Spline& s, const CadRegions& r) {
     worst = std::max(worst, (r.faces[static_cast<size_t>(f)].surface.value(u) - ev.value(u)).norm());
   EXPECT_LE(worst, r.tolerance) << "largest distance face - spline at random points";
   EXPECT_LE(r.max_position_deviation, r.tolerance);
+  // An edge's gap: the face's deviation plus its 3D curve's (a quarter of the tolerance).
+  EXPECT_LE(r.max_gap, 1.25 * r.tolerance);
 }
 
 TEST(BSplineBasis, SurfaceDerivativesMatchCentralDifferences) {
