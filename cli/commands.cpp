@@ -3,10 +3,11 @@
 #include <tbs/errors.h>
 #include <tbs/evaluator.h>
 #include <tbs/fit.h>
-#include <tbs/scan.h>
 #include <tbs/io.h>
 #include <tbs/knots.h>
 #include <tbs/parameterize.h>
+#include <tbs/scan.h>
+#include <tbs/shape_check.h>
 
 #include <nlohmann/json.hpp>
 
@@ -134,7 +135,18 @@ int run_info(const InfoOptions& o) {
                      {"features_at_most_c0", features_c0},
                      {"feature_edges", feat},
                      {"note", "lower bounds C^k from collinear knots (METHOD.md section 3)"}};
-  if (check.ok()) j["surface_bbox"] = box_json(sampled_surface_box(s));
+  if (check.ok()) {
+    j["surface_bbox"] = box_json(sampled_surface_box(s));
+    const Evaluator eval(s);
+    const ShapeCheck shape = check_shape(s, eval);
+    j["shape"] = {{"folds", shape.folded_triangles.size()},
+                  {"folded_triangles", shape.folded_triangles},
+                  {"max_normal_turn_degrees", shape.max_normal_turn},
+                  {"max_stretch", shape.max_stretch},
+                  {"note", "folds: domain triangles where the normal reverses (neighbouring samples more than 90 "
+                           "degrees apart, 8 x 8 per triangle and across smooth edges); max_stretch: largest "
+                           "|F_u|, |F_v| x domain diameter / model size"}};
+  }
   j["metadata"] = json::parse(f.metadata_json);
 
   std::cout << j.dump(2, ' ', false, json::error_handler_t::replace) << "\n";
@@ -317,6 +329,16 @@ int fit_and_write(const FitCommandOptions& o, ParameterizedScan* pscan, const Sc
   const ParameterizeReport* param = pscan ? &pscan->report : nullptr;
 
   const FitReport& rep = r.report;
+  if (rep.folds > 0) {
+    const std::string what = o.input + ": the fitted surface folds in " + std::to_string(rep.folds) +
+                             " domain triangle(s): its normal reverses there (see 'folds' in the report)";
+    if (o.no_folds == "strict")
+      throw InvalidInput(what + "; nothing was written (--no-folds strict). A larger --bending smooths the "
+                         "surface between the points");
+    if (!o.quiet)
+      std::fprintf(stderr, "tbs fit: warning: %s; CAD faces cannot follow it there. A larger --bending "
+                   "smooths the surface between the points\n", what.c_str());
+  }
   json meta;
   meta["source"] = valid_utf8(fs::path(o.input).filename().string());
   meta["fit"] = json::parse(rep.to_json(false));
@@ -353,6 +375,8 @@ int fit_and_write(const FitCommandOptions& o, ParameterizedScan* pscan, const Sc
   std::printf("%-18s %.3e (%.4g %s)\n", "RMS error", rep.rms_error, rep.rms_error_abs, o.units.c_str());
   std::printf("%-18s %.3e (%.4g %s)\n", "tolerance", rep.tolerance, rep.tolerance_abs, o.units.c_str());
   std::printf("%-18s %s (%s)\n", "converged", rep.converged ? "yes" : "no", rep.stop_reason.c_str());
+  std::printf("%-18s %d domain triangle(s)%s\n", "folds", rep.folds, rep.folds > 0 ? " (the normal reverses)" : "");
+  std::printf("%-18s %.3g (largest |F_u|, |F_v| x domain diameter / model size)\n", "max stretch", rep.max_stretch);
   std::printf("%-18s %.2f s\n", "time", rep.seconds + (param ? param->seconds : 0.0));
   // --export: each file as `tbs convert OUT.tbs FILE` would write it (error maps from the scan
   // or from the points kept in the .tbs).

@@ -53,6 +53,9 @@ struct FitCommandOptions {
   // the command starts (available_memory()).
   uint64_t max_memory = 0;
   bool quiet = false;
+  // A fit whose surface folds (FitReport::folds): "warn" writes it with a warning, "strict"
+  // refuses it (exit 3, nothing written).
+  std::string no_folds = "warn";
   std::vector<std::string> exports;  // files to convert the result to, as `tbs convert` does
   FitOptions fit;  // the library's defaults are the command's defaults
 };

@@ -132,6 +132,12 @@ int main(int argc, char** argv) {
                       "the vertices) until it has this many points (at least once) and fitted again; once "
                       "more while the fit still stops at the budget with at most 100,000 points; 0 = never")
       ->capture_default_str();
+  fit_cmd->add_option("--no-folds", fit.no_folds,
+                      "A fitted surface that folds (its normal reverses in some domain triangles; the "
+                      "summary's 'folds' line): warn writes it with a warning, strict refuses it (exit 3, "
+                      "nothing written)")
+      ->check(CLI::IsMember({"warn", "strict"}))
+      ->capture_default_str();
   fit_cmd->add_flag("--keep-points", fit.keep_points,
                     "Store the points and their parameters in the .tbs, so that 'tbs convert' can make "
                     "error maps and heat maps without --points (the file grows by about 100 bytes a point)");

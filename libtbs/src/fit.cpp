@@ -3,6 +3,7 @@
 #include <tbs/fit.h>
 #include <tbs/knots.h>
 #include <tbs/predicates.h>
+#include <tbs/shape_check.h>
 #include <tbs/tolerances.h>
 
 #include "fit_domain.h"
@@ -111,6 +112,8 @@ std::string FitReport::to_json(bool with_times) const {
   j["stop_reason"] = stop_reason;
   j["iterations"] = iterations;
   j["normals_estimated"] = normals_estimated;
+  j["folds"] = folds;
+  j["max_stretch"] = max_stretch;
   if (with_times) {
     j["memory_estimate"] = memory_estimate;
     j["seconds"] = seconds;
@@ -505,6 +508,9 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
       rep.holes = static_cast<int>(spline.domain().boundary_loops().size()) - 1;
       rep.control_points = spline.control_point_count();
       rep.memory_estimate = estimate_fit_memory(N, n, static_cast<size_t>(rep.control_points));
+      const ShapeCheck shape = check_shape(spline, eval, 8, opt.threads);
+      rep.folds = static_cast<int>(shape.folded_triangles.size());
+      rep.max_stretch = shape.max_stretch;
       res.spline = std::move(spline);
     };
     if (e.max <= rep.tolerance_abs) {

@@ -207,9 +207,12 @@ TEST(CliFit, FitsTheBundledScanAndWritesReport) {
   const json j = json::parse(read_file(rep.string()));
   for (const char* k : {"points", "degree", "domain_triangles", "control_points", "max_error",
                         "rms_error", "max_error_abs", "rms_error_abs", "tolerance", "converged",
-                        "seconds", "stage_seconds"})
+                        "folds", "max_stretch", "seconds", "stage_seconds"})
     EXPECT_TRUE(j.contains(k)) << k;
   EXPECT_TRUE(j["converged"].get<bool>());
+  EXPECT_EQ(j["folds"].get<int>(), 0);
+  EXPECT_GT(j["max_stretch"].get<double>(), 0.5);
+  EXPECT_LT(j["max_stretch"].get<double>(), 20);
   EXPECT_LE(j["max_error"].get<double>(), 1e-3);
   EXPECT_GT(j["feature_edges"].get<int>(), 0);
   EXPECT_EQ(j["holes"].get<int>(), 1);
@@ -220,6 +223,42 @@ TEST(CliFit, FitsTheBundledScanAndWritesReport) {
   EXPECT_EQ(meta["fit"]["control_points"], j["control_points"]);
   EXPECT_FALSE(meta["fit"].contains("seconds"));
   EXPECT_EQ(f.spline.control_point_count(), j["control_points"].get<int>());
+}
+
+// A scan of a surface that folds over itself, with its parameters: x = 8 (u - 1/2)^3 - (u - 1/2)
+// / 2 turns back where |u - 1/2| < 0.144. The fit follows the data, fold included: it is
+// written with a warning, or refused with --no-folds strict.
+TEST(CliFit, AFoldIsReportedAndRefusedOnRequest) {
+  const fs::path dir = temp_dir();
+  const fs::path scan = dir / "folded.xyz", out = dir / "folded.tbs", rep = dir / "folded.json";
+  {
+    std::ofstream f(scan);
+    f.precision(17);
+    for (int j = 0; j <= 60; ++j)
+      for (int i = 0; i <= 60; ++i) {
+        const double u = i / 60.0, v = j / 60.0;
+        const double x = 8 * std::pow(u - 0.5, 3) - 0.5 * (u - 0.5);
+        f << x << ' ' << v << ' ' << 0.05 * std::sin(3 * v) << ' ' << u << ' ' << v << '\n';
+      }
+  }
+  fs::remove(out);
+  Result r = run("fit '" + scan.string() + "' -o '" + out.string() + "' --report '" + rep.string() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json j = json::parse(read_file(rep.string()));
+  EXPECT_GT(j["folds"].get<int>(), 0);
+  EXPECT_NE(r.err.find("warning: " + scan.string() + ": the fitted surface folds"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("folds"), std::string::npos) << r.out;
+  // tbs info finds the same.
+  const Result info = run("info '" + out.string() + "'");
+  ASSERT_EQ(info.code, 0) << info.err;
+  EXPECT_EQ(json::parse(info.out)["shape"]["folds"].get<int>(), j["folds"].get<int>());
+  // Strict: exit 3, one line naming the scan, nothing written.
+  fs::remove(out);
+  r = run("fit '" + scan.string() + "' -o '" + out.string() + "' --no-folds strict --quiet");
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_NE(r.err.find("folded.xyz"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("folds"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
 }
 
 TEST(CliFit, SameBytesForAnyThreadCount) {

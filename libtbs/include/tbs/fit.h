@@ -101,6 +101,10 @@ struct FitReport {
   std::string stop_reason;
   int iterations = 0;
   bool normals_estimated = false;
+  /// Domain triangles where the fitted surface folds (its normal reverses; check_shape() at
+  /// resolution 8) and the largest stretch of its parameterization (ShapeCheck::max_stretch).
+  int folds = 0;
+  double max_stretch = 0;
   /// estimate_fit_memory() for the points, degree and control points of the result, in bytes
   /// (in the JSON with the times: it describes the run, not the spline).
   size_t memory_estimate = 0;
