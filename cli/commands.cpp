@@ -22,6 +22,7 @@
 #include <cstdio>
 #include <iostream>
 #include <iterator>
+#include <limits>
 #include <sstream>
 
 namespace tbs::cli {
@@ -205,13 +206,19 @@ int run_eval(const EvalOptions& o) {
   const bool need_d = o.normals || o.derivatives;
   ev.evaluate_batch(pts, pos, need_d ? std::span<Vector3>(du) : std::span<Vector3>(),
                     need_d ? std::span<Vector3>(dv) : std::span<Vector3>(), inside, o.threads);
+  size_t outside = 0, first_outside = 0;
   for (size_t i = 0; i < pts.size(); ++i)
-    if (!inside[i]) {
-      char buf[160];
-      std::snprintf(buf, sizeof buf, "%s:%zu: parameter point (%.17g, %.17g) is outside the domain",
-                    input_name.c_str(), line_of[i], pts[i].x(), pts[i].y());
-      throw OutsideDomain(std::string(buf) + "; 'tbs info " + o.file + "' shows the domain_bbox");
-    }
+    if (!inside[i] && outside++ == 0) first_outside = i;
+  if (outside > 0) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "%s:%zu: parameter point (%.17g, %.17g) is outside the domain",
+                  input_name.c_str(), line_of[first_outside], pts[first_outside].x(), pts[first_outside].y());
+    if (o.outside == "error")
+      throw OutsideDomain(std::string(buf) + "; 'tbs info " + o.file +
+                          "' shows the domain_bbox (--outside nan or skip evaluates the others)");
+    std::fprintf(stderr, "tbs eval: warning: %zu of %zu point(s) outside the domain %s, the first %s\n", outside,
+                 pts.size(), o.outside == "nan" ? "written as nan" : "left out", buf);
+  }
 
   std::string out;
   out.reserve(pts.size() * (need_d ? 200 : 64));
@@ -220,14 +227,22 @@ int run_eval(const EvalOptions& o) {
     const int len = std::snprintf(buf, sizeof buf, first ? "%.17g" : " %.17g", x);
     out.append(buf, static_cast<size_t>(len));
   };
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const Vector3 nan3(nan, nan, nan);
   for (size_t i = 0; i < pts.size(); ++i) {
+    if (!inside[i]) {
+      if (o.outside == "skip") continue;
+      // evaluate_batch leaves NaN there; written explicitly so that every column says nan.
+      pos[i] = nan3;
+      du[i] = dv[i] = nan3;
+    }
     put(pos[i].x(), true);
     put(pos[i].y(), false);
     put(pos[i].z(), false);
     if (o.normals) {
       Vector3 nrm = du[i].cross(dv[i]);
       const double len = nrm.norm();
-      nrm = len > 0 ? Vector3(nrm / len) : Vector3::Zero();
+      nrm = len > 0 || !inside[i] ? Vector3(nrm / len) : Vector3::Zero();
       for (int k = 0; k < 3; ++k) put(nrm[k], false);
     }
     if (o.derivatives) {
@@ -296,6 +311,24 @@ void print_parameterization(const ParameterizeReport& p) {
   if (p.points_dropped) std::printf("%-18s %zu (other components, unused or merged vertices)\n", "points dropped", p.points_dropped);
 }
 
+// Every point the fit counts as fitted (finite error) must evaluate, at the (u, v) it was
+// fitted at, on the spline as the .tbs stores it: the spline is formatted and parsed back (the
+// points the file may keep play no part) and each point located. A failure is a bug; it names
+// the first such point and nothing is written.
+void check_round_trip(const SplineFile& file, const FitResult& r, const std::string& input,
+                      const std::string& output) {
+  const SplineFile back = parse_tbs(format_tbs(SplineFile{file.spline, file.units, file.metadata_json}), output);
+  const Evaluator ev(back.spline);
+  for (size_t i = 0; i < r.uv.size(); ++i) {
+    if (!std::isfinite(r.error[i]) || ev.locate(r.uv[i]) >= 0) continue;
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "point %zu at (u, v) = (%.17g, %.17g)", i + 1, r.uv[i].x(), r.uv[i].y());
+    throw SolverError(output + ": internal check failed: " + buf + " of " + input +
+                      " was fitted but lies outside the domain of the spline as written; nothing was "
+                      "written. Please report this with the scan");
+  }
+}
+
 // Fits one scan with parameters and writes the .tbs, the report and the exports.
 // Fits one scan with parameters and writes the .tbs, the report and the exports. A flattened
 // coarse mesh whose vertices alone cannot be fitted within the control-point budget is
@@ -353,9 +386,14 @@ int fit_and_write(const FitCommandOptions& o, ParameterizedScan* pscan, const Sc
     file.points = scan.positions;
     file.point_parameters = r.uv;
   }
+  check_round_trip(file, r, o.input, output);
   write_tbs(output, file);
   if (!report.empty()) {
     json full = json::parse(rep.to_json(true));
+    json excluded = json::array();
+    for (size_t i = 0; i < r.error.size(); ++i)
+      if (!std::isfinite(r.error[i])) excluded.push_back(i);
+    full["excluded_points"] = std::move(excluded);
     if (param) full["parameterization"] = json::parse(param->to_json());
     write_file_atomic(report, full.dump(2, ' ', false, json::error_handler_t::replace) + "\n");
   }

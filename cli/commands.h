@@ -29,6 +29,7 @@ struct EvalOptions {
   bool normals = false;
   bool derivatives = false;
   int threads = 0;
+  std::string outside = "error";  // error | nan | skip: points outside the domain
 };
 int run_eval(const EvalOptions& o);
 

@@ -53,6 +53,10 @@ int main(int argc, char** argv) {
                      "Append the partial derivatives \"Fu_x Fu_y Fu_z Fv_x Fv_y Fv_z\"");
   eval_cmd->add_option("--threads,-t", eval.threads, "Worker threads (0 = all cores)")
       ->check(CLI::NonNegativeNumber);
+  eval_cmd->add_option("--outside", eval.outside,
+                       "A point outside the domain: error (exit 3, nothing written), nan (a line of nan "
+                       "values in its place) or skip (no line); nan and skip warn with their count")
+      ->check(CLI::IsMember({"error", "nan", "skip"}))->capture_default_str();
 
   FitCommandOptions fit;
   auto* fit_cmd = app.add_subcommand(

@@ -86,12 +86,15 @@ struct Errors {
   double max = 0, rms = 0;
 };
 
+// Fold repair: passes at most, and the bending weight's factor per pass.
+constexpr int kUnfoldPasses = 4;
+constexpr double kUnfoldFactor = 10;
+
 }  // namespace
 
 std::string FitReport::to_json(bool with_times) const {
   nlohmann::ordered_json j;
   j["points"] = points;
-  j["points_moved"] = points_moved;
   j["points_excluded"] = points_excluded;
   j["degree"] = degree;
   j["domain_triangles"] = domain_triangles;
@@ -113,6 +116,8 @@ std::string FitReport::to_json(bool with_times) const {
   j["iterations"] = iterations;
   j["normals_estimated"] = normals_estimated;
   j["folds"] = folds;
+  j["folds_found"] = folds_found;
+  j["unfold_passes"] = unfold_passes;
   j["max_stretch"] = max_stretch;
   if (with_times) {
     j["memory_estimate"] = memory_estimate;
@@ -325,8 +330,9 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
   std::vector<Point2> knots = default_knots(fdom.domain(), n);
   std::vector<Point3> positions(N);
   std::vector<double> err(N, 0.0);
-  bool first = true;
   std::vector<Point3> previous_cp;
+  // Extra bending weight per domain triangle where the converged surface folds (see unfold).
+  std::vector<double> boost;
 
   for (int iter = 0;; ++iter) {
     Spline spline = Spline::with_canonical_map(n, fdom.domain(), knots);
@@ -334,34 +340,10 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
       spline.control_points() = previous_cp;
     Evaluator eval(spline);
 
-    // Locate the points; on the first round nudge boundary points the snap left outside.
+    // Locate the points where the evaluator (and `tbs eval`) will: the domain builder keeps
+    // every point of the region inside the domain; one it could not is left out and counted.
     t0 = Clock::now();
-    for (size_t i = 0; i < N; ++i) {
-      if (fdom.excluded()[i]) continue;
-      located[i] = eval.locate(uv[i]);
-      if (located[i] >= 0 || !first) continue;
-      // Nearest domain vertex, then step toward the centroid of one of its triangles.
-      const Domain& d = spline.domain();
-      int best = -1;
-      double bd = std::numeric_limits<double>::infinity();
-      for (int v = 0; v < d.vertex_count(); ++v)
-        if (d.is_boundary_vertex(v) && (d.vertex(v) - uv[i]).norm() < bd) bd = (d.vertex(v) - uv[i]).norm(), best = v;
-      if (best >= 0) {
-        const int t = d.vertex_triangles(best)[0];
-        const auto& tri = d.triangle(t);
-        const Point2 c = (d.vertex(tri[0]) + d.vertex(tri[1]) + d.vertex(tri[2])) / 3.0;
-        for (double f = 1e-9; f < 1 && located[i] < 0; f *= 4) {
-          const Point2 q = uv[i] + f * (c - uv[i]);
-          located[i] = eval.locate(q);
-          if (located[i] >= 0) {
-            rep.max_uv_move = std::max(rep.max_uv_move, (q - uv[i]).norm());
-            uv[i] = q;
-            ++rep.points_moved;
-          }
-        }
-      }
-    }
-    first = false;
+    for (size_t i = 0; i < N; ++i) located[i] = fdom.excluded()[i] ? -1 : eval.locate(uv[i]);
     size_t used = 0;
     for (size_t i = 0; i < N; ++i) used += located[i] >= 0;
     if (used == 0) throw InvalidInput(name + ": no point lies in the fitting domain");
@@ -404,6 +386,7 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
           const double here = start[t + 1] - start[t];
           const double fewer = here > own ? (own / here) * (own / here) : 1.0;
           bend[t] = opt.bending * density * longest2[t] * longest2[t] * fewer;
+          if (boost.size() == static_cast<size_t>(T)) bend[t] *= boost[static_cast<size_t>(t)];
         }
       }
       return detail::FitPoints{scan.positions, normals, uv, located, order, start, fair, bend};
@@ -513,6 +496,40 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
       rep.max_stretch = shape.max_stretch;
       res.spline = std::move(spline);
     };
+    // Folds: where the converged surface turns back on itself between points, the bending
+    // weight of the folded triangles and their neighbours is raised tenfold and the control
+    // points solved again; kept while the tolerance holds and the folds get fewer.
+    if (e.max <= rep.tolerance_abs && opt.bending > 0) {
+      const Domain& d = spline.domain();
+      ShapeCheck shape = check_shape(spline, eval, 8, opt.threads);
+      rep.folds_found = static_cast<int>(shape.folded_triangles.size());
+      boost.assign(static_cast<size_t>(d.triangle_count()), 1.0);
+      for (int pass = 0; pass < kUnfoldPasses && !shape.folded_triangles.empty(); ++pass) {
+        const std::vector<double> boost_before = boost;
+        std::vector<char> near(boost.size(), 0);
+        for (int t : shape.folded_triangles)
+          for (int v : d.triangle(t))
+            for (int u : d.vertex_triangles(v)) near[static_cast<size_t>(u)] = 1;
+        for (size_t t = 0; t < boost.size(); ++t)
+          if (near[t]) boost[t] *= kUnfoldFactor;
+        progress("unfold", "round " + std::to_string(iter + 1) + ": the surface folds in " +
+                               std::to_string(shape.folded_triangles.size()) +
+                               " triangle(s); bending raised " + std::to_string(static_cast<int>(kUnfoldFactor)) +
+                               "x there", 1);
+        const std::vector<Point3> kept = spline.control_points();
+        solve();
+        e = measure();
+        ShapeCheck next = check_shape(spline, eval, 8, opt.threads);
+        if (e.max > rep.tolerance_abs || next.folded_triangles.size() >= shape.folded_triangles.size()) {
+          spline.control_points() = kept;
+          boost = boost_before;
+          e = measure();
+          break;
+        }
+        ++rep.unfold_passes;
+        shape = std::move(next);
+      }
+    }
     if (e.max <= rep.tolerance_abs) {
       finish(true, "tolerance reached");
       break;

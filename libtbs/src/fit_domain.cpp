@@ -840,7 +840,10 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
         const Vector2 d = (b - a).normalized();
         normal[e] = Vector2(d.y(), -d.x());  // right of a -> b: outside
         for (size_t q = i + 1; q < j; ++q) off[e] = std::max(off[e], (in.uv[loop[q % L]] - a).dot(normal[e]));
-        if (off[e] > 0) off[e] += 0.05 * tau + m.grid;
+        // Every edge moves out by at least two grid steps, past its own end points too: the
+        // snap below moves a vertex by at most 0.71 steps, so every point of the loop stays
+        // strictly inside, as the evaluator locates it (hole loops as the outer one).
+        off[e] = off[e] > 0 ? off[e] + 0.05 * tau + 2 * m.grid : 2 * m.grid;
       }
       std::vector<Point2> poly;
       for (size_t e = 0; e < K2; ++e) {
@@ -1018,7 +1021,9 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
     }
     m.rebuild_domain();
 
-    // Every parameter point of the region must be in the domain (up to the snap).
+    // Every parameter point of the region must be in the domain (closed: on its boundary counts),
+    // which is where the evaluator locates points. Past the fourth try (tau = 0) a point still
+    // outside is left to the fit, which leaves it out and counts it (points_excluded).
     size_t outside = 0;
     WCdt::Face_handle hint;
     for (size_t i = 0; i < n && (outside == 0 || tau > 0); ++i) {
@@ -1040,19 +1045,7 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
           } while (++c != done);
         }
       }
-      if (!in_domain) {
-        // Allowed: a snap away from the domain.
-        bool near = false;
-        for (int k = 0; k < 3; ++k) {
-          auto va = f->vertex(WCdt::cw(k)), vb = f->vertex(WCdt::ccw(k));
-          if (m.cdt.is_infinite(va) || m.cdt.is_infinite(vb)) continue;
-          const K::Segment_2 seg(va->point(), vb->point());
-          if (CGAL::squared_distance(seg, cp(in.uv[i])) < 16 * m.grid * m.grid) near = true;
-        }
-        if (!near) {
-          ++outside;
-        }
-      }
+      if (!in_domain) ++outside;
     }
     if (outside > 0 && tau > 0) {
       tau *= 0.25;

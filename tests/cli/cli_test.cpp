@@ -135,6 +135,44 @@ TEST(Cli, PointOutsideTheDomainNamesItsLine) {
   EXPECT_EQ(h.code, 3) << h.err;
 }
 
+TEST(Cli, PointsOutsideTheDomainAsNanOrSkipped) {
+  // Inside, outside (far, and in the hole of the sample), inside.
+  const std::string in = "0.1 0.1\n5 5\n1.45 0.5\n0.2 0.2\n";
+  const Result all = run("eval '" + sample_path() + "' --normals --derivatives", "0.1 0.1\n0.2 0.2\n");
+  ASSERT_EQ(all.code, 0) << all.err;
+  const std::string first = all.out.substr(0, all.out.find('\n') + 1), last = all.out.substr(first.size());
+
+  const Result nan = run("eval '" + sample_path() + "' --normals --derivatives --outside nan", in);
+  ASSERT_EQ(nan.code, 0) << nan.err;
+  std::istringstream lines(nan.out);
+  std::vector<std::string> got;
+  for (std::string l; std::getline(lines, l);) got.push_back(l + "\n");
+  ASSERT_EQ(got.size(), 4u) << nan.out;
+  EXPECT_EQ(got[0], first);
+  EXPECT_EQ(got[3], last);
+  for (int k : {1, 2}) {
+    std::istringstream words(got[static_cast<size_t>(k)]);
+    int count = 0;
+    for (std::string w; words >> w; ++count) EXPECT_EQ(w, "nan") << got[static_cast<size_t>(k)];
+    EXPECT_EQ(count, 12);  // x y z, the normal, both derivatives
+  }
+  EXPECT_NE(nan.err.find("2 of 4 point(s) outside the domain"), std::string::npos) << nan.err;
+  EXPECT_NE(nan.err.find("<stdin>:2:"), std::string::npos) << nan.err;
+
+  const Result skip = run("eval '" + sample_path() + "' --normals --derivatives --outside skip", in);
+  ASSERT_EQ(skip.code, 0) << skip.err;
+  EXPECT_EQ(skip.out, all.out);
+  EXPECT_NE(skip.err.find("2 of 4 point(s) outside the domain left out"), std::string::npos) << skip.err;
+
+  // The default is still an error, and nothing else is accepted.
+  EXPECT_EQ(run("eval '" + sample_path() + "'", in).code, 3);
+  EXPECT_EQ(run("eval '" + sample_path() + "' --outside clamp", in).code, 2);
+  // Nothing outside: no warning.
+  const Result quiet = run("eval '" + sample_path() + "' --outside nan", "0.1 0.1\n");
+  EXPECT_EQ(quiet.code, 0);
+  EXPECT_TRUE(quiet.err.empty()) << quiet.err;
+}
+
 TEST(Cli, MalformedPointLine) {
   const Result r = run("eval '" + sample_path() + "'", "0.1 0.1\n0.2 abc\n");
   EXPECT_EQ(r.code, 3);

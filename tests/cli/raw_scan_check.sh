@@ -4,6 +4,7 @@
 # fit is converted to CAD files, each checked by OpenCASCADE before writing (tbs refuses an
 # invalid shell with exit 5), and the region-face files read back by FreeCAD
 # (freecad_shape_check.py: valid, one shell, the reported faces, one free loop per boundary loop).
+# Every point the fit counts as fitted evaluates through `tbs eval` (fitted_points_check.py).
 #   raw_scan_check.sh TBS_EXE WORK_DIR DATA_FILE MODE
 #     DATA_FILE inside the tarball, e.g. data/meshes/head.off
 #     MODE default: region faces at the default CAD tolerance as STEP and IGES, triangle patches
@@ -29,7 +30,9 @@ mkdir -p "$work"
 tar xzf "$tarball" -C "$work" "$file"
 name="$(basename "$file")"
 out="$work/${name%.*}"
-"$tbs" fit "$work/$file" -o "$out.tbs" --tolerance 1e-3 --report "$out.json" --quiet | tee "$out.txt"
+"$tbs" fit "$work/$file" -o "$out.tbs" --tolerance 1e-3 --report "$out.json" --keep-points --quiet | tee "$out.txt"
+# Every point the fit counts evaluates through `tbs eval` at the (u, v) it was fitted at.
+python3 "$here/fitted_points_check.py" "$tbs" "$out.tbs" "$out.json"
 python3 - "$out.json" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))

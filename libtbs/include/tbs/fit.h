@@ -77,11 +77,11 @@ struct FitOptions {
 /// The fit report: the paper's Table 1 columns and more. Errors are distances |p - F(u)|.
 struct FitReport {
   size_t points = 0;
-  size_t points_moved = 0;  ///< parameters nudged into the domain (on its simplified boundary)
   /// Points left out of the fit: outliers outside the largest parameter region (bare points),
-  /// or points of other mesh components. Their error is NaN.
+  /// points of other mesh components, or (rarely) points the domain builder could not keep
+  /// inside the domain. Their error is NaN. Every other point is located by Evaluator::locate
+  /// at its own (u, v): `tbs eval` evaluates it.
   size_t points_excluded = 0;
-  double max_uv_move = 0;   ///< largest such nudge, in parameter units
   int degree = 0;
   int domain_triangles = 0;
   int domain_vertices = 0;
@@ -105,6 +105,11 @@ struct FitReport {
   /// resolution 8) and the largest stretch of its parameterization (ShapeCheck::max_stretch).
   int folds = 0;
   double max_stretch = 0;
+  /// Folds found when the tolerance was first reached, and the passes that removed some of
+  /// them: each raises the bending weight tenfold in and around the folded triangles and solves
+  /// again, kept only while the tolerance holds and the folds get fewer (at most 4).
+  int folds_found = 0;
+  int unfold_passes = 0;
   /// estimate_fit_memory() for the points, degree and control points of the result, in bytes
   /// (in the JSON with the times: it describes the run, not the spline).
   size_t memory_estimate = 0;
