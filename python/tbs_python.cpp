@@ -6,6 +6,7 @@
 #include <tbs/fit.h>
 #include <tbs/io.h>
 #include <tbs/mesh_export.h>
+#include <tbs/parameterize.h>
 #include <tbs/scan.h>
 #include <tbs/tessellate.h>
 
@@ -227,8 +228,8 @@ PySpline fit(const Array& points, const std::optional<Array>& uv, const std::opt
              const std::optional<py::function>& progress) {
   if (!uv)
     throw tbs::InvalidInput(
-        "uv is required: the module fits points with parameters; flatten a raw scan with "
-        "`tbs fit` first");
+        "uv is required: the module fits points with parameters; tbs.parameterize(points, faces) "
+        "computes them for a raw scan, as `tbs fit` does");
   const tbs::Scan scan = scan_from(points, uv, normals, faces);
   tbs::FitOptions o;
   o.degree = degree;
@@ -260,6 +261,50 @@ PySpline fit(const Array& points, const std::optional<Array>& uv, const std::opt
     r = tbs::fit(scan, o);
   }
   return PySpline(std::move(r.spline), r.report.to_json(true), "unitless");
+}
+
+// Parameters for a raw scan, as `tbs fit` computes them before it fits: a mesh is repaired,
+// one component chosen, a closed one cut open and flattened; a point cloud is meshed first.
+py::dict parameterize(const Array& points, const std::optional<Faces>& faces, const std::optional<Array>& normals,
+                      const std::string& method, int component, size_t min_points, double sharp_angle,
+                      const std::optional<py::function>& progress) {
+  const tbs::Scan scan = scan_from(points, std::nullopt, normals, faces);
+  tbs::ParameterizeOptions o;
+  if (method == "auto") {
+    o.method = tbs::FlattenMethod::Auto;
+  } else if (method == "lscm") {
+    o.method = tbs::FlattenMethod::Lscm;
+  } else if (method == "mean-value") {
+    o.method = tbs::FlattenMethod::MeanValue;
+  } else {
+    throw tbs::InvalidInput("method must be 'auto', 'lscm' or 'mean-value', not '" + method + "'");
+  }
+  if (component < 0) throw tbs::InvalidInput("component must be 0 (the largest) or a component number from 1");
+  if (!(sharp_angle > 0 && sharp_angle < 180)) throw tbs::InvalidInput("sharp_angle must be between 0 and 180 degrees");
+  o.component = component;
+  o.min_points = min_points;
+  o.sharp_angle = sharp_angle;
+  o.progress = [&](const std::string& line) {
+    py::gil_scoped_acquire acquire;
+    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+    if (progress) (*progress)(line);
+  };
+  tbs::ParameterizedScan p;
+  {
+    py::gil_scoped_release release;
+    p = tbs::parameterize_scan(scan, o);
+  }
+  py::dict d;
+  d["points"] = to_array(p.scan.positions, 3);
+  d["uv"] = to_array(p.scan.uv, 2);
+  d["faces"] = p.scan.has_faces() ? py::object(faces_array(p.scan.triangles)) : py::none();
+  d["normals"] = p.scan.has_normals() ? py::object(to_array(p.scan.normals, 3)) : py::none();
+  py::array_t<long long> source(static_cast<py::ssize_t>(p.source.size()));
+  auto sm = source.mutable_unchecked<1>();
+  for (size_t i = 0; i < p.source.size(); ++i) sm(static_cast<py::ssize_t>(i)) = static_cast<long long>(p.source[i]);
+  d["source"] = source;
+  d["report"] = json_loads(p.report.to_json());
+  return d;
 }
 
 PySpline load(const std::string& path) {
@@ -351,6 +396,17 @@ PYBIND11_MODULE(tbs, m) {
         "options and defaults are the same). faces (F, 3), the scan's triangles when it is a "
         "mesh, let the fit find sharp edges from the dihedral angles, as the command does. progress(stage, message, fraction) is called "
         "between steps; returning False cancels the fit (raises Cancelled), as does Ctrl-C.");
+  m.def("parameterize", &parameterize, py::arg("points"), py::arg("faces") = py::none(),
+        py::arg("normals") = py::none(), py::arg("method") = "auto", py::arg("component") = 0,
+        py::arg("min_points") = 0, py::arg("sharp_angle") = 40.0, py::arg("progress") = py::none(),
+        "Parameters (u, v) for a scan without them, as `tbs fit` computes them: a mesh (faces (F, "
+        "3)) is repaired, its component `component` (1 = the largest; 0 the same) chosen, cut open if "
+        "closed and flattened (method 'auto': LSCM, or mean-value coordinates if LSCM folds; 'lscm'; "
+        "'mean-value'); a point cloud (faces None) is meshed first. min_points > 0 subdivides a coarse "
+        "mesh 1-to-4 until it has that many points. Returns a dict: points (M, 3), uv (M, 2), faces "
+        "(F, 3) or None, normals (M, 3) or None, which fit() takes as they are; source (M,), the "
+        "input point of each point; report, as `tbs fit --report` gives it under parameterization. "
+        "progress(line) is called between steps.");
   m.def("load", &load, py::arg("path"), "Reads a .tbs file.");
   m.def("read_scan", &read_scan, py::arg("path"), py::arg("max_points") = 50'000'000,
         "Reads a scan (PLY, OBJ, OFF, STL, XYZ): dict of points (N, 3) and uv, normals, faces "
