@@ -86,10 +86,6 @@ struct Errors {
   double max = 0, rms = 0;
 };
 
-// Fold repair: passes at most, and the bending weight's factor per pass.
-constexpr int kUnfoldPasses = 4;
-constexpr double kUnfoldFactor = 10;
-
 }  // namespace
 
 std::string FitReport::to_json(bool with_times) const {
@@ -116,8 +112,6 @@ std::string FitReport::to_json(bool with_times) const {
   j["iterations"] = iterations;
   j["normals_estimated"] = normals_estimated;
   j["folds"] = folds;
-  j["folds_found"] = folds_found;
-  j["unfold_passes"] = unfold_passes;
   j["max_stretch"] = max_stretch;
   if (with_times) {
     j["memory_estimate"] = memory_estimate;
@@ -331,8 +325,6 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
   std::vector<Point3> positions(N);
   std::vector<double> err(N, 0.0);
   std::vector<Point3> previous_cp;
-  // Extra bending weight per domain triangle where the converged surface folds (see unfold).
-  std::vector<double> boost;
 
   for (int iter = 0;; ++iter) {
     Spline spline = Spline::with_canonical_map(n, fdom.domain(), knots);
@@ -386,7 +378,6 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
           const double here = start[t + 1] - start[t];
           const double fewer = here > own ? (own / here) * (own / here) : 1.0;
           bend[t] = opt.bending * density * longest2[t] * longest2[t] * fewer;
-          if (boost.size() == static_cast<size_t>(T)) bend[t] *= boost[static_cast<size_t>(t)];
         }
       }
       return detail::FitPoints{scan.positions, normals, uv, located, order, start, fair, bend};
@@ -496,40 +487,6 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
       rep.max_stretch = shape.max_stretch;
       res.spline = std::move(spline);
     };
-    // Folds: where the converged surface turns back on itself between points, the bending
-    // weight of the folded triangles and their neighbours is raised tenfold and the control
-    // points solved again; kept while the tolerance holds and the folds get fewer.
-    if (e.max <= rep.tolerance_abs && opt.bending > 0) {
-      const Domain& d = spline.domain();
-      ShapeCheck shape = check_shape(spline, eval, 8, opt.threads);
-      rep.folds_found = static_cast<int>(shape.folded_triangles.size());
-      boost.assign(static_cast<size_t>(d.triangle_count()), 1.0);
-      for (int pass = 0; pass < kUnfoldPasses && !shape.folded_triangles.empty(); ++pass) {
-        const std::vector<double> boost_before = boost;
-        std::vector<char> near(boost.size(), 0);
-        for (int t : shape.folded_triangles)
-          for (int v : d.triangle(t))
-            for (int u : d.vertex_triangles(v)) near[static_cast<size_t>(u)] = 1;
-        for (size_t t = 0; t < boost.size(); ++t)
-          if (near[t]) boost[t] *= kUnfoldFactor;
-        progress("unfold", "round " + std::to_string(iter + 1) + ": the surface folds in " +
-                               std::to_string(shape.folded_triangles.size()) +
-                               " triangle(s); bending raised " + std::to_string(static_cast<int>(kUnfoldFactor)) +
-                               "x there", 1);
-        const std::vector<Point3> kept = spline.control_points();
-        solve();
-        e = measure();
-        ShapeCheck next = check_shape(spline, eval, 8, opt.threads);
-        if (e.max > rep.tolerance_abs || next.folded_triangles.size() >= shape.folded_triangles.size()) {
-          spline.control_points() = kept;
-          boost = boost_before;
-          e = measure();
-          break;
-        }
-        ++rep.unfold_passes;
-        shape = std::move(next);
-      }
-    }
     if (e.max <= rep.tolerance_abs) {
       finish(true, "tolerance reached");
       break;

@@ -105,11 +105,6 @@ struct FitReport {
   /// resolution 8) and the largest stretch of its parameterization (ShapeCheck::max_stretch).
   int folds = 0;
   double max_stretch = 0;
-  /// Folds found when the tolerance was first reached, and the passes that removed some of
-  /// them: each raises the bending weight tenfold in and around the folded triangles and solves
-  /// again, kept only while the tolerance holds and the folds get fewer (at most 4).
-  int folds_found = 0;
-  int unfold_passes = 0;
   /// estimate_fit_memory() for the points, degree and control points of the result, in bytes
   /// (in the JSON with the times: it describes the run, not the spline).
   size_t memory_estimate = 0;
