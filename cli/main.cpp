@@ -88,6 +88,9 @@ int main(int argc, char** argv) {
                       "Weight of the bending (thin-plate) term that holds the surface between "
                       "points (dimensionless; 0 turns it off)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
+  fit_cmd->add_option("--smoothness", fit.fit.smoothness, "Weight of the third-order smoothness term that keeps the surface's curvature "
+                      "between points without flattening it (dimensionless; 0 turns it off)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
   auto* fa = fit_cmd->add_option("--feature-angle", fit.fit.feature_angle,
                                  "Dihedral angle in degrees above which an edge is a sharp feature "
                                  "(kept C^0)")

@@ -223,7 +223,7 @@ tbs::Scan scan_from(const Array& points, const std::optional<Array>& uv, const s
 
 PySpline fit(const Array& points, const std::optional<Array>& uv, const std::optional<Array>& normals,
              const std::optional<Faces>& faces, int degree,
-             double tolerance, double tolerance_abs, double fairness, double bending, double feature_angle,
+             double tolerance, double tolerance_abs, double fairness, double bending, double smoothness, double feature_angle,
              bool features, int triangles, int knot_sweeps, int max_iterations, int threads,
              const std::optional<py::function>& progress) {
   if (!uv)
@@ -237,6 +237,7 @@ PySpline fit(const Array& points, const std::optional<Array>& uv, const std::opt
   o.tolerance_abs = tolerance_abs;
   o.fairness = fairness;
   o.bending = bending;
+  o.smoothness = smoothness;
   o.feature_angle = feature_angle;
   o.features = features;
   o.triangles = triangles;
@@ -389,7 +390,7 @@ PYBIND11_MODULE(tbs, m) {
   m.def("fit", &fit, py::arg("points"), py::arg("uv"), py::arg("normals") = py::none(),
         py::arg("faces") = py::none(), py::arg("degree") = 3,
         py::arg("tolerance") = 1e-3, py::arg("tolerance_abs") = 0.0, py::arg("fairness") = 1e-3,
-        py::arg("bending") = 1e-4, py::arg("feature_angle") = 40.0, py::arg("features") = true,
+        py::arg("bending") = 1e-4, py::arg("smoothness") = 3e-6, py::arg("feature_angle") = 40.0, py::arg("features") = true,
         py::arg("triangles") = 0, py::arg("knot_sweeps") = 1, py::arg("max_iterations") = 25,
         py::arg("threads") = 0, py::arg("progress") = py::none(),
         "Fits one spline to points (N, 3) with parameters uv (N, 2), as `tbs fit` does (the "

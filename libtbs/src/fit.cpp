@@ -45,6 +45,7 @@ void check_options(const FitOptions& o) {
   if (o.triangles < 0 || o.triangles > 10'000'000) bad("triangles must be between 0 (automatic) and 10^7");
   if (!(o.fairness >= 0) || !std::isfinite(o.fairness)) bad("fairness must be >= 0");
   if (!(o.bending >= 0) || !std::isfinite(o.bending)) bad("bending must be >= 0");
+  if (!(o.smoothness >= 0) || !std::isfinite(o.smoothness)) bad("smoothness must be >= 0");
   if (!(o.feature_angle > 0 && o.feature_angle < 180)) bad("feature angle must be between 0 and 180 degrees");
   if (o.max_control_points < 0) bad("max_control_points must be >= 0");
   if (o.max_iterations < 0) bad("max_iterations must be >= 0");
@@ -107,6 +108,7 @@ std::string FitReport::to_json(bool with_times) const {
   j["scale"] = scale;
   j["fairness"] = fairness;
   j["bending"] = bending;
+  j["smoothness"] = smoothness;
   j["converged"] = converged;
   j["stop_reason"] = stop_reason;
   j["iterations"] = iterations;
@@ -257,6 +259,7 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
   rep.degree = n;
   rep.fairness = opt.fairness;
   rep.bending = opt.bending;
+  rep.smoothness = opt.smoothness;
 
   Box3 box;
   for (const auto& p : scan.positions) box.extend(p);
@@ -312,7 +315,7 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
   // and does not grow stronger as refinement shrinks the triangles.
   const double lambda = opt.fairness;
   std::vector<double> fair(N, 0.0);
-  std::vector<double> bend;
+  std::vector<double> bend, jerk;
   const size_t budget_cp = opt.max_control_points > 0 ? static_cast<size_t>(opt.max_control_points)
                                                       : std::max<size_t>(N, 16);
   const size_t memory_cp = affordable_control_points(N, n, opt.max_memory);
@@ -380,7 +383,21 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
           bend[t] = opt.bending * density * longest2[t] * longest2[t] * fewer;
         }
       }
-      return detail::FitPoints{scan.positions, normals, uv, located, order, start, fair, bend};
+      // Third-order smoothness: weight density * h^6, so that h^3 |F_uuu| and the like compare
+      // with the point distances as lengths.
+      jerk.clear();
+      if (opt.smoothness > 0) {
+        const double total_area = std::accumulate(area.begin(), area.end(), 0.0);
+        const double density = total_area > 0 ? static_cast<double>(start[T]) / total_area : 0.0;
+        const double own = beta_count(n);
+        jerk.resize(T);
+        for (int t = 0; t < T; ++t) {
+          const double here = start[t + 1] - start[t];
+          const double fewer = here > own ? (own / here) * (own / here) : 1.0;
+          jerk[t] = opt.smoothness * density * longest2[t] * longest2[t] * longest2[t] * fewer;
+        }
+      }
+      return detail::FitPoints{scan.positions, normals, uv, located, order, start, fair, bend, jerk};
     };
     auto solve = [&] {
       const auto ts = Clock::now();

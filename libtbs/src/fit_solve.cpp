@@ -34,6 +34,7 @@ struct Local {
   std::vector<double> G;                // m x m, data term
   std::array<std::vector<double>, 6> F;  // m x m, fairness: xx xy xz yy yz zz
   std::vector<double> rhs;              // m x 3
+  std::vector<double> data_diag;        // m, diagonal of the data term alone
 };
 
 // Second derivatives of F at interior quadrature points of a domain triangle, as sparse rows
@@ -41,7 +42,7 @@ struct Local {
 // evaluator gives F, F_u, F_v). The step is far below the triangle size and the points are
 // away from its edges, so the differences stay inside the triangle and off feature edges.
 struct BendSample {
-  BasisRow row[3];  // at x, x + d e_u, x + d e_v
+  BasisRow row[5];  // at x, x + d e_u, x - d e_u, x + d e_v, x - d e_v
   double delta = 0;
   double weight = 0;  // quadrature weight times triangle area
 };
@@ -49,6 +50,9 @@ struct BendSample {
 // Symmetric Gauss rules on a triangle: barycentric points (a, a, 1 - 2a) and their
 // permutations, with weights summing to 1. Three points are exact for quadratics: the
 // bending integrand of a cubic piece. Degree 4 and up use Dunavant's six points (degree 4).
+// Sub-triangles per edge of the composite bending rule in sparse triangles.
+constexpr int kBendLevel = 4;
+
 struct QuadOrbit {
   double a, w;
 };
@@ -56,24 +60,42 @@ constexpr QuadOrbit kQuad3[] = {{1.0 / 6.0, 1.0 / 3.0}};
 constexpr QuadOrbit kQuad6[] = {{0.445948490915965, 0.223381589678011},
                                 {0.091576213509771, 0.109951743655322}};
 
+// The composite rule of a domain triangle: `level` x `level` congruent sub-triangles (the
+// barycentric lattice of step 1/level, upward and downward ones), the Gauss rule on each. The
+// spline is piecewise polynomial inside a domain triangle (the cells of its knot lines), so a
+// single rule misses most of the shapes a sparse triangle can take: a swing between the
+// rule's points costs nothing. Sub-triangles about as small as the cells see them.
 template <class F>
-void for_bend_samples(const Evaluator& eval, const Domain& d, int degree, int t, BendSample& s, F&& f) {
+void for_bend_samples(const Evaluator& eval, const Domain& d, int degree, int t, int level, BendSample& s, F&& f) {
   const auto& tri = d.triangle(t);
   const Point2 &a = d.vertex(tri[0]), &b = d.vertex(tri[1]), &c = d.vertex(tri[2]);
   const double area = 0.5 * std::abs((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
   const double h = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-  s.delta = 1e-4 * h;
+  const double step = 1.0 / level;
+  s.delta = 2e-2 * h * step;
   const Point2 du(s.delta, 0), dv(0, s.delta);
   const std::span<const QuadOrbit> rule = degree <= 3 ? std::span<const QuadOrbit>(kQuad3) : std::span<const QuadOrbit>(kQuad6);
-  for (const QuadOrbit& q : rule)
-    for (int k = 0; k < 3; ++k) {
-      const double l1 = 1 - 2 * q.a;
-      const Point2 x = (k == 0 ? l1 : q.a) * a + (k == 1 ? l1 : q.a) * b + (k == 2 ? l1 : q.a) * c;
-      if (!eval.basis_row(x, s.row[0]) || !eval.basis_row(x + du, s.row[1]) || !eval.basis_row(x + dv, s.row[2]))
-        continue;
-      s.weight = q.w * area;
-      f(s);
-    }
+  const double sub_area = area * step * step;
+  // Sub-triangle corners in barycentric lattice coordinates (i, j) of (b, c).
+  auto at = [&](double i, double j) { return a + (i * step) * (b - a) + (j * step) * (c - a); };
+  for (int i = 0; i < level; ++i)
+    for (int j = 0; i + j < level; ++j)
+      for (int down = 0; down < 2; ++down) {
+        if (down && i + j + 2 > level) continue;
+        const Point2 p0 = down ? at(i + 1, j + 1) : at(i, j);
+        const Point2 p1 = down ? at(i, j + 1) : at(i + 1, j);
+        const Point2 p2 = down ? at(i + 1, j) : at(i, j + 1);
+        for (const QuadOrbit& q : rule)
+          for (int k = 0; k < 3; ++k) {
+            const double l1 = 1 - 2 * q.a;
+            const Point2 x = (k == 0 ? l1 : q.a) * p0 + (k == 1 ? l1 : q.a) * p1 + (k == 2 ? l1 : q.a) * p2;
+            if (!eval.basis_row(x, s.row[0]) || !eval.basis_row(x + du, s.row[1]) || !eval.basis_row(x - du, s.row[2]) ||
+                !eval.basis_row(x + dv, s.row[3]) || !eval.basis_row(x - dv, s.row[4]))
+              continue;
+            s.weight = q.w * sub_area;
+            f(s);
+          }
+      }
 }
 
 template <class F>
@@ -100,11 +122,17 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
     BasisRow row;
     std::vector<int> where;
     BendSample bend;
-    std::vector<double> huu, huv, hvv;
+    std::array<std::vector<double>, 7> h;
   };
-  tbb::enumerable_thread_specific<Scratch> scratch([N] { return Scratch{{}, std::vector<int>(N, -1), {}, {}, {}, {}}; });
-  auto bends = [&](int t) { return !pts.bend.empty() && pts.bend[t] > 0; };
+  tbb::enumerable_thread_specific<Scratch> scratch([N] { return Scratch{{}, std::vector<int>(N, -1), {}, {}}; });
+  auto bends = [&](int t) {
+    return (!pts.bend.empty() && pts.bend[t] > 0) || (!pts.jerk.empty() && pts.jerk[t] > 0);
+  };
   auto idle = [&](int t) { return pts.start[t + 1] == pts.start[t] && !bends(t); };
+  // Triangles with fewer points than control points of their own (beta_count) take the
+  // composite rule; where the points outnumber them they decide the shape, one rule will do.
+  const int own = beta_count(spline.degree());
+  auto bend_level = [&](int t) { return pts.start[t + 1] - pts.start[t] >= own ? 1 : kBendLevel; };
   std::vector<std::vector<int>> support(T);
   run(threads, [&] {
     tbb::parallel_for(0, T, [&](int t) {
@@ -117,7 +145,7 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
           if (sc.where[j] < 0) sc.where[j] = 0, S.push_back(j);
       }
       if (bends(t))
-        for_bend_samples(eval, d, spline.degree(), t, sc.bend, [&](const BendSample& b) {
+        for_bend_samples(eval, d, spline.degree(), t, bend_level(t), sc.bend, [&](const BendSample& b) {
           for (const BasisRow& r : b.row)
             for (int j : r.index)
               if (sc.where[j] < 0) sc.where[j] = 0, S.push_back(j);
@@ -170,6 +198,7 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
   if (fair)
     for (auto& f : F) f.assign(nnz, 0.0);
   std::vector<double> rhs(3 * static_cast<size_t>(N), 0.0);
+  std::vector<double> data_diag(N, 0.0);
 
   // Local systems in parallel, scattered in triangle order (deterministic sums).
   constexpr int kChunk = 128;
@@ -189,6 +218,7 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
         if (fair)
           for (auto& f : L.F) f.assign(m * m, 0.0);
         L.rhs.assign(m * 3, 0.0);
+        L.data_diag.assign(m, 0.0);
         std::vector<int> loc;
         for (int q = pts.start[t]; q < pts.start[t + 1]; ++q) {
           const int i = pts.order[q];
@@ -205,6 +235,7 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
             const size_t ra = static_cast<size_t>(loc[a]) * m;
             const double wa = r.value[a];
             for (size_t b = 0; b < k; ++b) L.G[ra + loc[b]] += wa * r.value[b];
+            L.data_diag[loc[a]] += wa * wa;
             for (int c = 0; c < 3; ++c) L.rhs[3 * loc[a] + c] += wa * p[c];
           }
           if (fair) {
@@ -221,37 +252,49 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
           }
         }
         if (bends(t)) {
-          // bend[t] * sum_q w_q (huu huu^T + 2 huv huv^T + hvv hvv^T), rows dense over S.
-          for (auto* h : {&sc.huu, &sc.huv, &sc.hvv}) h->assign(m, 0.0);
-          for_bend_samples(eval, d, spline.degree(), t, sc.bend, [&](const BendSample& b) {
-            std::fill(sc.huu.begin(), sc.huu.end(), 0.0);
-            std::fill(sc.huv.begin(), sc.huv.end(), 0.0);
-            std::fill(sc.hvv.begin(), sc.hvv.end(), 0.0);
-            // F_uu = (F_u(x + d e_u) - F_u(x)) / d, F_vv likewise, F_uv from both sides.
-            const double f = 1.0 / b.delta;
-            for (int side = 0; side < 3; ++side) {
+          // Central differences of the exact first derivatives (rows x, x +- d e_u, x +- d e_v):
+          // second derivatives for the thin-plate energy, third ones for the jerk energy. Each
+          // is a dense row over S; the sample adds w * sum_k c_k h_k h_k^T.
+          const double wb = pts.bend.empty() ? 0.0 : pts.bend[t];
+          const double wj = pts.jerk.empty() ? 0.0 : pts.jerk[t];
+          for (auto& h : sc.h) h.assign(m, 0.0);
+          for_bend_samples(eval, d, spline.degree(), t, bend_level(t), sc.bend, [&](const BendSample& b) {
+            for (auto& h : sc.h) std::fill(h.begin(), h.end(), 0.0);
+            const double f2 = 1.0 / (2 * b.delta), f4 = 1.0 / (4 * b.delta), f3 = 1.0 / (b.delta * b.delta);
+            // h: 0 uu, 1 uv, 2 vv, 3 uuu, 4 uuv, 5 uvv, 6 vvv
+            static constexpr double kU[5][7] = {{0, 0, 0, -2, 0, -2, 0}, {1, 0, 0, 1, 0, 0, 0}, {-1, 0, 0, 1, 0, 0, 0},
+                                                {0, 1, 0, 0, 0, 1, 0}, {0, -1, 0, 0, 0, 1, 0}};
+            static constexpr double kV[5][7] = {{0, 0, 0, 0, -2, 0, -2}, {0, 1, 0, 0, 1, 0, 0}, {0, -1, 0, 0, 1, 0, 0},
+                                                {0, 0, 1, 0, 0, 0, 1}, {0, 0, -1, 0, 0, 0, 1}};
+            // Coefficients of F_u (kU) and F_v (kV) per row: uu, uuu, uvv from F_u; vv, uuv, vvv
+            // from F_v; uv from both.
+            for (int side = 0; side < 5; ++side) {
               const BasisRow& r = b.row[side];
               for (size_t a = 0; a < r.index.size(); ++a) {
                 const int l = sc.where[r.index[a]];
                 if (l < 0) throw SolverError("internal: basis function outside its support set");
-                if (side == 0) {
-                  sc.huu[l] -= f * r.du[a];
-                  sc.hvv[l] -= f * r.dv[a];
-                  sc.huv[l] -= 0.5 * f * (r.du[a] + r.dv[a]);
-                } else if (side == 1) {
-                  sc.huu[l] += f * r.du[a];
-                  sc.huv[l] += 0.5 * f * r.dv[a];
-                } else {
-                  sc.hvv[l] += f * r.dv[a];
-                  sc.huv[l] += 0.5 * f * r.du[a];
+                const double u = r.du[a], v = r.dv[a];
+                sc.h[0][l] += f2 * kU[side][0] * u;
+                sc.h[1][l] += f4 * (kU[side][1] * u + kV[side][1] * v);
+                sc.h[2][l] += f2 * kV[side][2] * v;
+                if (wj > 0) {
+                  sc.h[3][l] += f3 * kU[side][3] * u;
+                  sc.h[4][l] += f3 * kV[side][4] * v;
+                  sc.h[5][l] += f3 * kU[side][5] * u;
+                  sc.h[6][l] += f3 * kV[side][6] * v;
                 }
               }
             }
-            const double w = pts.bend[t] * b.weight;
-            for (size_t a = 0; a < m; ++a) {
-              if (sc.huu[a] == 0 && sc.huv[a] == 0 && sc.hvv[a] == 0) continue;
-              for (size_t c = 0; c < m; ++c)
-                L.G[a * m + c] += w * (sc.huu[a] * sc.huu[c] + 2 * sc.huv[a] * sc.huv[c] + sc.hvv[a] * sc.hvv[c]);
+            const double c[7] = {wb, 2 * wb, wb, wj, 3 * wj, 3 * wj, wj};
+            for (int k = 0; k < 7; ++k) {
+              if (c[k] == 0) continue;
+              const double w = c[k] * b.weight;
+              const std::vector<double>& h = sc.h[k];
+              for (size_t a = 0; a < m; ++a) {
+                if (h[a] == 0) continue;
+                const double ha = w * h[a];
+                for (size_t cc = 0; cc < m; ++cc) L.G[a * m + cc] += ha * h[cc];
+              }
             }
           });
         }
@@ -264,6 +307,7 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
       for (size_t a = 0; a < m; ++a) {
         const int j = L.S[a];
         for (int c = 0; c < 3; ++c) rhs[3 * static_cast<size_t>(j) + c] += L.rhs[3 * a + c];
+        data_diag[j] += L.data_diag[a];
         // Columns L.S[a..] are sorted and a subset of row j's columns: merge walk.
         size_t pos = row_start[j];
         for (size_t b = a; b < m; ++b) {
@@ -277,11 +321,12 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
     }
   }
 
-  // Regulariser scale: the mean diagonal of the data term over reached control points.
+  // Regulariser scale: the mean diagonal of the data term over reached control points (the
+  // smoothness terms left out: their scale follows the knot spacing, not the data).
   double diag = 0;
   int reached = 0;
   for (int j = 0; j < N; ++j)
-    if (G[row_start[j]] > 0) diag += G[row_start[j]], ++reached;
+    if (data_diag[j] > 0) diag += data_diag[j], ++reached;
   if (reached == 0) throw SolverError("no data point lies in the domain");
   diag /= reached;
   const double mu = kRegularization * diag;

@@ -25,6 +25,9 @@ struct FitPoints {
   /// Per-triangle weight of the thin-plate term (empty: no such term): the bending energy
   /// integral of F over triangle t is multiplied by bend[t]; see solve_control_points.
   std::span<const double> bend = {};
+  /// Per-triangle weight of the third-order term (empty: none): the integral over triangle t
+  /// of |F_uuu|^2 + 3 |F_uuv|^2 + 3 |F_uvv|^2 + |F_vvv|^2, which vanishes on quadratics.
+  std::span<const double> jerk = {};
   double fair_weight(int i) const { return fair.empty() ? 1.0 : fair[i]; }
 };
 

@@ -217,7 +217,8 @@ TEST(Fit, ReproducesCubicPolynomial) {
     o.triangles = 40;
     o.max_iterations = 0;
     o.fairness = 0;
-    o.bending = 0;  // it bends the surface toward a plane
+    o.bending = 0;     // it bends the surface toward a plane
+    o.smoothness = 0;  // it vanishes on quadratics, not on cubics
     const FitResult r = fit(s, o);
     // Reproduced up to rounding (6e-10 and 3e-9 here). A quartic term, outside the spline space,
     // is missed by 1.6e-5 and 3.5e-5 with the same fit, which is what this bound tells apart.
@@ -261,6 +262,7 @@ TEST(Fit, BendingHoldsTheSurfaceBetweenSparsePoints) {
   for (int k = 0; k < 2; ++k) {
     FitOptions o;
     o.bending = k == 0 ? 0.0 : 1e-4;
+    o.smoothness = 0;  // bending alone here
     const FitResult r = fit(s, o);
     EXPECT_GT(r.spline.control_point_count(), static_cast<int>(s.positions.size()));
     Evaluator ev(r.spline);
@@ -274,6 +276,59 @@ TEST(Fit, BendingHoldsTheSurfaceBetweenSparsePoints) {
   // The surface's height varies by 0.4; between 81 points it stays within 2 % of that.
   EXPECT_LT(between[1], 0.008) << "without bending " << between[0];
   EXPECT_LT(between[1], 0.5 * between[0]);
+}
+
+// Issue 19: 8 x 8 points on a saddle, with their (u, v) and no normals, at the default
+// options. More control points than points, so the smoothness term decides the surface between
+// them: it vanishes on quadratics, so the saddle itself is the smoothest surface through them.
+// 1,000 random parameters stay within 1e-3 of it (the saddle's height varies by 1).
+TEST(Fit, SparseSaddleIsMetBetweenItsPoints) {
+  auto f = [](double u, double v) { return Point3(u, v, 2 * (u - 0.5) * (v - 0.5)); };
+  Scan s;
+  for (int j = 0; j < 8; ++j)
+    for (int i = 0; i < 8; ++i) {
+      const double u = i / 7.0, v = j / 7.0;
+      s.positions.push_back(f(u, v));
+      s.uv.emplace_back(u, v);
+    }
+  const FitResult r = fit(s, FitOptions{});
+  EXPECT_TRUE(r.report.converged) << r.report.stop_reason;
+  EXPECT_EQ(r.report.folds, 0);
+  Evaluator ev(r.spline);
+  std::mt19937_64 rng(19);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  double worst = 0;
+  for (int k = 0; k < 1000; ++k) {
+    const Point2 u(uni(rng), uni(rng));
+    ASSERT_GE(ev.locate(u), 0) << u.transpose();
+    worst = std::max(worst, (ev.value(u) - f(u.x(), u.y())).norm());
+  }
+  EXPECT_LT(worst, 1e-3) << r.spline.control_point_count() << " control points";
+}
+
+// The third-order smoothness term vanishes on quadratics, however heavy: 6 x 6 points of a
+// quadratic (fewer than the control points) are met everywhere, as they are without the term.
+// A term that also bent quadratics (or a regulariser scaled by it) would pull the surface off.
+TEST(Fit, SmoothnessLeavesQuadraticsAlone) {
+  auto f = [](double u, double v) { return Point3(u, v, 0.7 * u * u - 0.5 * u * v + 0.3 * v * v); };
+  const Scan s = grid_scan(f, 6, 6, 0, 5, false);
+  for (double w : {1e-6, 1.0, 100.0}) {
+    FitOptions o;
+    o.fairness = 0;
+    o.bending = 0;
+    o.smoothness = w;
+    o.max_iterations = 0;
+    const FitResult r = fit(s, o);
+    EXPECT_GT(r.spline.control_point_count(), static_cast<int>(s.positions.size()));
+    Evaluator ev(r.spline);
+    double worst = 0;
+    for (int i = 0; i <= 40; ++i)
+      for (int j = 0; j <= 40; ++j) {
+        const Point2 u(i / 40.0, j / 40.0);
+        if (ev.locate(u) >= 0) worst = std::max(worst, (ev.value(u) - f(u.x(), u.y())).norm());
+      }
+    EXPECT_LT(worst, 1e-5) << "smoothness " << w;
+  }
 }
 
 TEST(Fit, NoisySmoothSurfaceWithinToleranceAndNoise) {

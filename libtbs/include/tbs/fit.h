@@ -42,6 +42,13 @@ struct FitOptions {
   /// sparse scan (a mesh's vertices) can be met at its points by a surface that swings far off
   /// between them. 0 turns it off.
   double bending = 1e-4;
+  /// Weight of the third-order smoothness term, dimensionless: the integral of
+  /// |F_uuu|^2 + 3 |F_uuv|^2 + 3 |F_uvv|^2 + |F_vvv|^2 over each domain triangle, times the mean
+  /// point density and the sixth power of the triangle's longest edge, and by
+  /// (beta_count(n) / points in it)^2 where a triangle holds more points than that. It vanishes
+  /// on quadratics, so unlike bending it does not flatten a curved surface: between sparse
+  /// points it keeps the curvature the points show instead of swinging. 0 turns it off.
+  double smoothness = 3e-6;
   /// Dihedral angle (degrees) above which a mesh edge is a sharp feature.
   double feature_angle = 40;
   bool features = true;
@@ -97,6 +104,7 @@ struct FitReport {
   double tolerance_abs = 0;  ///< model units
   double fairness = 0;
   double bending = 0;
+  double smoothness = 0;
   bool converged = false;
   std::string stop_reason;
   int iterations = 0;
