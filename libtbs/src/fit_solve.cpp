@@ -3,6 +3,7 @@
 #include <tbs/errors.h>
 
 #include <Eigen/CholmodSupport>
+#include <Eigen/Dense>
 #include <Eigen/SparseCore>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -122,7 +123,7 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
     BasisRow row;
     std::vector<int> where;
     BendSample bend;
-    std::array<std::vector<double>, 7> h;
+    Eigen::MatrixXd A;
   };
   tbb::enumerable_thread_specific<Scratch> scratch([N] { return Scratch{{}, std::vector<int>(N, -1), {}, {}}; });
   auto bends = [&](int t) {
@@ -257,46 +258,52 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
           // is a dense row over S; the sample adds w * sum_k c_k h_k h_k^T.
           const double wb = pts.bend.empty() ? 0.0 : pts.bend[t];
           const double wj = pts.jerk.empty() ? 0.0 : pts.jerk[t];
-          for (auto& h : sc.h) h.assign(m, 0.0);
+          // Rows of all samples, each scaled by the square root of its weight, stacked into
+          // A; the triangle adds A^T A (a dense product, far faster than row by row).
+          const double c[7] = {wb, 2 * wb, wb, wj, 3 * wj, 3 * wj, wj};
+          int active = 0;
+          for (double ck : c) active += ck > 0;
+          Eigen::MatrixXd& A = sc.A;
+          A.setZero(static_cast<Eigen::Index>(active) * 64, static_cast<Eigen::Index>(m));
+          Eigen::Index rows = 0;
           for_bend_samples(eval, d, spline.degree(), t, bend_level(t), sc.bend, [&](const BendSample& b) {
-            for (auto& h : sc.h) std::fill(h.begin(), h.end(), 0.0);
+            if (rows + active > A.rows()) A.conservativeResize(2 * A.rows(), Eigen::NoChange);
             const double f2 = 1.0 / (2 * b.delta), f4 = 1.0 / (4 * b.delta), f3 = 1.0 / (b.delta * b.delta);
-            // h: 0 uu, 1 uv, 2 vv, 3 uuu, 4 uuv, 5 uvv, 6 vvv
+            // Derivative k (0 uu, 1 uv, 2 vv, 3 uuu, 4 uuv, 5 uvv, 6 vvv) from the five rows
+            // (x, x + d e_u, x - d e_u, x + d e_v, x - d e_v): coefficients of F_u (kU) and of
+            // F_v (kV). uu, uuu, uvv come from F_u; vv, uuv, vvv from F_v; uv from both.
             static constexpr double kU[5][7] = {{0, 0, 0, -2, 0, -2, 0}, {1, 0, 0, 1, 0, 0, 0}, {-1, 0, 0, 1, 0, 0, 0},
                                                 {0, 1, 0, 0, 0, 1, 0}, {0, -1, 0, 0, 0, 1, 0}};
             static constexpr double kV[5][7] = {{0, 0, 0, 0, -2, 0, -2}, {0, 1, 0, 0, 1, 0, 0}, {0, -1, 0, 0, 1, 0, 0},
                                                 {0, 0, 1, 0, 0, 0, 1}, {0, 0, -1, 0, 0, 0, 1}};
-            // Coefficients of F_u (kU) and F_v (kV) per row: uu, uuu, uvv from F_u; vv, uuv, vvv
-            // from F_v; uv from both.
+            static constexpr int kFrom[7] = {2, 4, 2, 3, 3, 3, 3};  // scale: 2 f2, 4 f4, 3 f3
+            double scale[7];
+            Eigen::Index row_of[7];
+            Eigen::Index next = rows;
+            for (int k = 0; k < 7; ++k) {
+              const double f = kFrom[k] == 2 ? f2 : kFrom[k] == 4 ? f4 : f3;
+              scale[k] = c[k] > 0 ? f * std::sqrt(c[k] * b.weight) : 0.0;
+              row_of[k] = c[k] > 0 ? next++ : -1;
+            }
+            A.middleRows(rows, next - rows).setZero();
             for (int side = 0; side < 5; ++side) {
               const BasisRow& r = b.row[side];
               for (size_t a = 0; a < r.index.size(); ++a) {
                 const int l = sc.where[r.index[a]];
                 if (l < 0) throw SolverError("internal: basis function outside its support set");
                 const double u = r.du[a], v = r.dv[a];
-                sc.h[0][l] += f2 * kU[side][0] * u;
-                sc.h[1][l] += f4 * (kU[side][1] * u + kV[side][1] * v);
-                sc.h[2][l] += f2 * kV[side][2] * v;
-                if (wj > 0) {
-                  sc.h[3][l] += f3 * kU[side][3] * u;
-                  sc.h[4][l] += f3 * kV[side][4] * v;
-                  sc.h[5][l] += f3 * kU[side][5] * u;
-                  sc.h[6][l] += f3 * kV[side][6] * v;
-                }
+                for (int k = 0; k < 7; ++k)
+                  if (row_of[k] >= 0) A(row_of[k], l) += scale[k] * (kU[side][k] * u + kV[side][k] * v);
               }
             }
-            const double c[7] = {wb, 2 * wb, wb, wj, 3 * wj, 3 * wj, wj};
-            for (int k = 0; k < 7; ++k) {
-              if (c[k] == 0) continue;
-              const double w = c[k] * b.weight;
-              const std::vector<double>& h = sc.h[k];
-              for (size_t a = 0; a < m; ++a) {
-                if (h[a] == 0) continue;
-                const double ha = w * h[a];
-                for (size_t cc = 0; cc < m; ++cc) L.G[a * m + cc] += ha * h[cc];
-              }
-            }
+            rows = next;
           });
+          if (rows > 0) {
+            // L.G is row-major m x m; as a column-major map its lower triangle is what the
+            // scatter below reads (entries (a, b >= a) of the row-major matrix).
+            Eigen::Map<Eigen::MatrixXd> G(L.G.data(), static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(m));
+            G.selfadjointView<Eigen::Lower>().rankUpdate(A.topRows(rows).transpose());
+          }
         }
         for (size_t a = 0; a < m; ++a) sc.where[L.S[a]] = -1;
       });
