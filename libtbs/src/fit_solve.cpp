@@ -38,21 +38,24 @@ struct Local {
   std::vector<double> data_diag;        // m, diagonal of the data term alone
 };
 
-// Second derivatives of F at interior quadrature points of a domain triangle, as sparse rows
-// over the control points, by forward differences of the exact first derivatives (the
-// evaluator gives F, F_u, F_v). The step is far below the triangle size and the points are
-// away from its edges, so the differences stay inside the triangle and off feature edges.
+// Second and third derivatives of F at interior quadrature points of a domain triangle, as
+// sparse rows over the control points, by central differences of the exact first derivatives
+// (the evaluator gives F, F_u, F_v). The step, 2 % of the sub-triangle's size, is below the
+// distance of the Gauss points from the sub-triangle's edges (a sixth of its heights) for the
+// well-shaped triangles the domain builder makes, so the differences stay inside the triangle
+// and do not reach across a feature edge.
 struct BendSample {
   BasisRow row[5];  // at x, x + d e_u, x - d e_u, x + d e_v, x - d e_v
   double delta = 0;
   double weight = 0;  // quadrature weight times triangle area
 };
 
+// Sub-triangles per edge of the composite smoothness rule in sparse triangles.
+constexpr int kBendLevel = 4;
+
 // Symmetric Gauss rules on a triangle: barycentric points (a, a, 1 - 2a) and their
 // permutations, with weights summing to 1. Three points are exact for quadratics: the
 // bending integrand of a cubic piece. Degree 4 and up use Dunavant's six points (degree 4).
-// Sub-triangles per edge of the composite bending rule in sparse triangles.
-constexpr int kBendLevel = 4;
 
 struct QuadOrbit {
   double a, w;
