@@ -367,34 +367,24 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
         const auto& t = d.triangle(located[i]);
         fair[i] = at_feature[t[0]] || at_feature[t[1]] || at_feature[t[2]] ? 0.0 : longest2[located[i]];
       }
-      // Bending: weight density * h^4 per triangle, the density of the points in use over the
-      // whole domain, so that triangles with few points are held by it. Where a triangle has
-      // more points than control points of its own (beta_count), the points decide its shape
-      // and bending would only bias it: there the weight drops by (beta_count / points)^2.
-      bend.clear();
-      if (opt.bending > 0) {
+      // Bending and smoothness: weights density * h^4 and density * h^6 per triangle (so that
+      // h^2 |F_uu| and h^3 |F_uuu| compare with the point distances as lengths), with the
+      // density of the points in use over the whole domain, so that triangles with few points
+      // are held by them. Where a triangle has more points than control points of its own
+      // (beta_count), the points decide its shape and the terms would only bias it: there the
+      // weights drop by (beta_count / points)^2.
+      bend.assign(opt.bending > 0 ? T : 0, 0.0);
+      jerk.assign(opt.smoothness > 0 ? T : 0, 0.0);
+      if (opt.bending > 0 || opt.smoothness > 0) {
         const double total_area = std::accumulate(area.begin(), area.end(), 0.0);
         const double density = total_area > 0 ? static_cast<double>(start[T]) / total_area : 0.0;
         const double own = beta_count(n);
-        bend.resize(T);
         for (int t = 0; t < T; ++t) {
           const double here = start[t + 1] - start[t];
-          const double fewer = here > own ? (own / here) * (own / here) : 1.0;
-          bend[t] = opt.bending * density * longest2[t] * longest2[t] * fewer;
-        }
-      }
-      // Third-order smoothness: weight density * h^6, so that h^3 |F_uuu| and the like compare
-      // with the point distances as lengths.
-      jerk.clear();
-      if (opt.smoothness > 0) {
-        const double total_area = std::accumulate(area.begin(), area.end(), 0.0);
-        const double density = total_area > 0 ? static_cast<double>(start[T]) / total_area : 0.0;
-        const double own = beta_count(n);
-        jerk.resize(T);
-        for (int t = 0; t < T; ++t) {
-          const double here = start[t + 1] - start[t];
-          const double fewer = here > own ? (own / here) * (own / here) : 1.0;
-          jerk[t] = opt.smoothness * density * longest2[t] * longest2[t] * longest2[t] * fewer;
+          const double w = density * (here > own ? (own / here) * (own / here) : 1.0);
+          const double h4 = longest2[t] * longest2[t];
+          if (!bend.empty()) bend[t] = opt.bending * w * h4;
+          if (!jerk.empty()) jerk[t] = opt.smoothness * w * h4 * longest2[t];
         }
       }
       return detail::FitPoints{scan.positions, normals, uv, located, order, start, fair, bend, jerk};

@@ -56,7 +56,6 @@ constexpr int kBendLevel = 4;
 // Symmetric Gauss rules on a triangle: barycentric points (a, a, 1 - 2a) and their
 // permutations, with weights summing to 1. Three points are exact for quadratics: the
 // bending integrand of a cubic piece. Degree 4 and up use Dunavant's six points (degree 4).
-
 struct QuadOrbit {
   double a, w;
 };
@@ -257,8 +256,7 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
         }
         if (bends(t)) {
           // Central differences of the exact first derivatives (rows x, x +- d e_u, x +- d e_v):
-          // second derivatives for the thin-plate energy, third ones for the jerk energy. Each
-          // is a dense row over S; the sample adds w * sum_k c_k h_k h_k^T.
+          // second derivatives for the thin-plate energy, third ones for the jerk energy.
           const double wb = pts.bend.empty() ? 0.0 : pts.bend[t];
           const double wj = pts.jerk.empty() ? 0.0 : pts.jerk[t];
           // Rows of all samples, each scaled by the square root of its weight, stacked into
@@ -267,7 +265,7 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
           int active = 0;
           for (double ck : c) active += ck > 0;
           Eigen::MatrixXd& A = sc.A;
-          A.setZero(static_cast<Eigen::Index>(active) * 64, static_cast<Eigen::Index>(m));
+          A.resize(static_cast<Eigen::Index>(active) * 64, static_cast<Eigen::Index>(m));  // rows zeroed as used
           Eigen::Index rows = 0;
           for_bend_samples(eval, d, spline.degree(), t, bend_level(t), sc.bend, [&](const BendSample& b) {
             if (rows + active > A.rows()) A.conservativeResize(2 * A.rows(), Eigen::NoChange);
@@ -279,13 +277,12 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
                                                 {0, 1, 0, 0, 0, 1, 0}, {0, -1, 0, 0, 0, 1, 0}};
             static constexpr double kV[5][7] = {{0, 0, 0, 0, -2, 0, -2}, {0, 1, 0, 0, 1, 0, 0}, {0, -1, 0, 0, 1, 0, 0},
                                                 {0, 0, 1, 0, 0, 0, 1}, {0, 0, -1, 0, 0, 0, 1}};
-            static constexpr int kFrom[7] = {2, 4, 2, 3, 3, 3, 3};  // scale: 2 f2, 4 f4, 3 f3
+            const double f[7] = {f2, f4, f2, f3, f3, f3, f3};
             double scale[7];
             Eigen::Index row_of[7];
             Eigen::Index next = rows;
             for (int k = 0; k < 7; ++k) {
-              const double f = kFrom[k] == 2 ? f2 : kFrom[k] == 4 ? f4 : f3;
-              scale[k] = c[k] > 0 ? f * std::sqrt(c[k] * b.weight) : 0.0;
+              scale[k] = c[k] > 0 ? f[k] * std::sqrt(c[k] * b.weight) : 0.0;
               row_of[k] = c[k] > 0 ? next++ : -1;
             }
             A.middleRows(rows, next - rows).setZero();
