@@ -391,7 +391,7 @@ PYBIND11_MODULE(tbs, m) {
         py::arg("faces") = py::none(), py::arg("degree") = 3,
         py::arg("tolerance") = 1e-3, py::arg("tolerance_abs") = 0.0, py::arg("fairness") = 1e-3,
         py::arg("bending") = 1e-4, py::arg("smoothness") = 3e-6, py::arg("feature_angle") = 40.0, py::arg("features") = true,
-        py::arg("triangles") = 0, py::arg("knot_sweeps") = 1, py::arg("max_iterations") = 25,
+        py::arg("triangles") = 0, py::arg("knot_sweeps") = 3, py::arg("max_iterations") = 25,
         py::arg("threads") = 0, py::arg("progress") = py::none(),
         "Fits one spline to points (N, 3) with parameters uv (N, 2), as `tbs fit` does (the "
         "options and defaults are the same). faces (F, 3), the scan's triangles when it is a "

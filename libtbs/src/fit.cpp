@@ -25,6 +25,10 @@
 namespace tbs {
 namespace {
 
+// The largest |F_u|, |F_v| times the domain's diameter over the model size that a knot pass may
+// bring a fit to (issue 19's limit for a fair fit).
+constexpr double kMaxStretch = 20;
+
 using Clock = std::chrono::steady_clock;
 
 // Below this many points there are too few neighbours to estimate normals: the fairness term
@@ -427,6 +431,10 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
     // Free knots: OptimizeKnot on the vertices of triangles with large errors, then re-solve.
     if (opt.knot_sweeps > 0 && e.max > rep.tolerance_abs) {
       const Domain& d = spline.domain();
+      // The knot search judges moves by the local points alone; the smoothness terms of the
+      // global solve do not enter it. A pass after which the surface folds in more triangles
+      // than before, or stretches beyond kMaxStretch and by more than 10 %, is undone.
+      ShapeCheck shape = check_shape(spline, eval, 8, opt.threads);
       for (int sweep = 0; sweep < opt.knot_sweeps; ++sweep) {
         const auto ts = Clock::now();
         std::vector<double> tri_err(d.triangle_count(), 0.0);
@@ -443,8 +451,16 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
                               std::to_string(verts.size()) + " vertices",
                  0);
         const auto pts = make_points();
+        const std::vector<Point2> saved_knots = spline.knots();
+        const std::vector<Point3> saved_cp = spline.control_points();
+        const std::vector<double> saved_err = err;
+        const Errors saved_e = e;
+        std::vector<int> moved_primary;  // in the order the moves were made
         const auto st = detail::optimize_knots(spline, eval, located, pts, lambda, verts,
-                                               [&](int v, const Point2& p) { fdom.move_vertex(fdom.ids()[v], p); },
+                                               [&](int v, const Point2& p) {
+                                                 moved_primary.push_back(v);
+                                                 fdom.move_vertex(fdom.ids()[v], p);
+                                               },
                                                opt.threads);
         stage["knots"] += seconds_since(ts);
         {
@@ -457,6 +473,40 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
         if (st.moved == 0) break;
         solve();
         e = measure();
+        const ShapeCheck after = check_shape(spline, eval, 8, opt.threads);
+        if (after.folded_triangles.size() > shape.folded_triangles.size() ||
+            after.max_stretch > std::max(1.1 * shape.max_stretch, kMaxStretch)) {
+          // Undo: sub-knots first, then the primary knots in reverse order (each step back is
+          // the reverse of a valid move), the domain with them.
+          const int stride = n + 1;
+          std::vector<int> changed;
+          for (int v = 0; v < d.vertex_count(); ++v) {
+            bool any = false;
+            for (int k = 1; k <= n; ++k)
+              if (spline.knot(v, k) != saved_knots[static_cast<size_t>(v) * stride + k]) {
+                spline.set_knot(v, k, saved_knots[static_cast<size_t>(v) * stride + k]);
+                any = true;
+              }
+            if (any || spline.knot(v, 0) != saved_knots[static_cast<size_t>(v) * stride]) changed.push_back(v);
+          }
+          for (auto it = moved_primary.rbegin(); it != moved_primary.rend(); ++it) {
+            const Point2& p = saved_knots[static_cast<size_t>(*it) * stride];
+            spline.set_knot(*it, 0, p);
+            fdom.move_vertex(fdom.ids()[*it], p);
+          }
+          for (int v : changed) eval.update_knots(v);
+          for (size_t i = 0; i < N; ++i) located[i] = fdom.excluded()[i] ? -1 : eval.locate(uv[i]);
+          spline.control_points() = saved_cp;
+          err = saved_err;
+          e = saved_e;
+          char msg[200];
+          std::snprintf(msg, sizeof msg, "round %d: knot moves undone: the surface would fold in %zu triangles "
+                        "(%zu before) and stretch to %.3g (%.3g before)", iter + 1, after.folded_triangles.size(),
+                        shape.folded_triangles.size(), after.max_stretch, shape.max_stretch);
+          progress("knots", msg, 1);
+          break;
+        }
+        shape = after;
         // The energy stalls: another pass would gain less than 1 %.
         if (st.energy_before - st.energy_after < 0.01 * st.energy_before) break;
       }

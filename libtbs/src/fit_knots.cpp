@@ -4,12 +4,14 @@
 #include <tbs/predicates.h>
 #include <tbs/tolerances.h>
 
+#include <Eigen/Dense>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 
 namespace tbs::detail {
@@ -25,10 +27,112 @@ double tri_area(const Domain& d, int t) {
 
 namespace {
 
+// The energy a choice of knots for s allows (variable projection, restricted to the star): the
+// knots of s enter only the basis functions of the triangles around s, so their control points
+// are solved again by least squares on the local points, the others held as they are, and the
+// energy is judged with that solution. Without it a knot move is judged with control points
+// fitted to the old knots, and nearly every move looks worse than it is.
+class LocalResolve {
+ public:
+  LocalResolve(const Spline& spline, std::span<const int> star, const FitPoints& pts, std::span<const int> local,
+               double lambda)
+      : spline_(spline), pts_(pts), local_(local), lambda_(lambda) {
+    const int bc = beta_count(spline.degree());
+    for (int t : star)
+      for (int j = 0; j < bc; ++j) free_.push_back(spline.control_point_index(t, j));
+    std::sort(free_.begin(), free_.end());
+    free_.erase(std::unique(free_.begin(), free_.end()), free_.end());
+    const auto m = static_cast<Eigen::Index>(free_.size());
+    c_.resize(m, 3);
+    for (Eigen::Index f = 0; f < m; ++f)
+      for (int k = 0; k < 3; ++k) c_(f, k) = spline.control_points()[free_[f]][k];
+  }
+
+  /// Whether the points decide the star's control points: twice as many points in the star
+  /// as control points (three coordinates each against three unknowns each), and in each of
+  /// its triangles at least as many as the triangle's own control points (`fewest`; fewer,
+  /// and the smoothness terms of the global solve shape the triangle, which the local energy
+  /// does not see).
+  bool determined(size_t star_points, size_t fewest) const {
+    return star_points >= 2 * free_.size() && fewest >= static_cast<size_t>(beta_count(spline_.degree()));
+  }
+
+  /// min over the star's control points of the data and fairness energy of the local points,
+  /// plus a small pull to the current control points (it keeps the solve definite).
+  double energy(const Evaluator& eval) {
+    const auto q = static_cast<Eigen::Index>(local_.size()), m = static_cast<Eigen::Index>(free_.size());
+    a_.setZero(q, m);
+    du_.setZero(q, m);
+    dv_.setZero(q, m);
+    r_.resize(q, 3);
+    fu_.resize(q, 3);
+    fv_.resize(q, 3);
+    const auto& cp = spline_.control_points();
+    for (Eigen::Index i = 0; i < q; ++i) {
+      const int p = local_[i];
+      Eigen::Vector3d f = Eigen::Vector3d::Zero(), fu = f, fv = f;
+      if (eval.basis_row(pts_.uv[p], row_)) {
+        for (size_t k = 0; k < row_.index.size(); ++k) {
+          const auto it = std::lower_bound(free_.begin(), free_.end(), row_.index[k]);
+          if (it != free_.end() && *it == row_.index[k]) {
+            const auto j = it - free_.begin();
+            a_(i, j) = row_.value[k];
+            du_(i, j) = row_.du[k];
+            dv_(i, j) = row_.dv[k];
+          } else {
+            const Point3& c = cp[row_.index[k]];
+            f += row_.value[k] * c;
+            fu += row_.du[k] * c;
+            fv += row_.dv[k] * c;
+          }
+        }
+      }
+      r_.row(i) = (pts_.p[p] - f).transpose();
+      fu_.row(i) = fu.transpose();
+      fv_.row(i) = fv.transpose();
+    }
+    g_.noalias() = a_.transpose() * a_;
+    const double mu = 1e-6 * std::max(g_.trace() / static_cast<double>(m), 1e-300);
+    g_.diagonal().array() += mu;
+    x_ = g_.llt().solve(a_.transpose() * r_ + mu * c_);
+    const Eigen::MatrixXd& x = x_;
+    double e = ((r_ - a_ * x).rowwise().squaredNorm()).sum() + mu * (x - c_).squaredNorm();
+    if (lambda_ > 0) {
+      fu_.noalias() += du_ * x;
+      fv_.noalias() += dv_ * x;
+      for (Eigen::Index i = 0; i < q; ++i) {
+        const int p = local_[i];
+        const Eigen::Vector3d n(pts_.n[p].x(), pts_.n[p].y(), pts_.n[p].z());
+        const double a = fu_.row(i).dot(n), b = fv_.row(i).dot(n);
+        e += lambda_ * pts_.fair_weight(p) * (a * a + b * b);
+      }
+    }
+    return e;
+  }
+
+  /// The control points of the last energy() call's solution.
+  std::vector<std::pair<int, Point3>> solution() const {
+    std::vector<std::pair<int, Point3>> out(free_.size());
+    for (size_t f = 0; f < free_.size(); ++f)
+      out[f] = {free_[f], x_.row(static_cast<Eigen::Index>(f)).transpose()};
+    return out;
+  }
+
+ private:
+  const Spline& spline_;
+  const FitPoints& pts_;
+  std::span<const int> local_;
+  double lambda_;
+  std::vector<int> free_;
+  Eigen::MatrixXd c_, a_, du_, dv_, r_, fu_, fv_, g_, x_;
+  BasisRow row_;
+};
+
 struct VertexResult {
   bool tried = false, moved = false, primary_moved = false;
   double before = 0, after = 0;
   std::vector<Point2> knots;
+  std::vector<std::pair<int, Point3>> control_points;  // the star's, re-solved for the knots
 };
 
 // OptimizeKnot(t_s) on one spline copy: pattern search, accepting only improvements.
@@ -58,8 +162,13 @@ VertexResult optimize_vertex(Spline& spline, Evaluator& eval, int s, std::vector
     for (size_t q = 0; q < local.size(); q += stride) local[w++] = local[q];
     local.resize(w);
   }
+  // Knots are moved only where the points decide the star's control points.
+  LocalResolve resolve(spline, star, pts, local, lambda);
+  size_t star_points = 0, fewest = std::numeric_limits<size_t>::max();
+  for (int t : star) star_points += tri_points[t].size(), fewest = std::min(fewest, tri_points[t].size());
+  if (!resolve.determined(star_points, fewest)) return res;
   res.tried = true;
-  double energy = local_energy(eval, pts, local, lambda);
+  double energy = resolve.energy(eval);
   res.before = energy;
   std::vector<double> area0;
   for (int t : star) area0.push_back(tri_area(d, t));
@@ -90,10 +199,11 @@ VertexResult optimize_vertex(Spline& spline, Evaluator& eval, int s, std::vector
     double e = 0;
     if (ok) {
       eval.update_knots(s);
-      e = local_energy(eval, pts, local, lambda);
+      e = resolve.energy(eval);
     }
     if (ok && e < energy * (1 - 1e-9)) {
       energy = e;
+      res.control_points = resolve.solution();
       res.moved = true;
       return true;
     }
@@ -206,6 +316,7 @@ KnotSweepStats optimize_knots(Spline& spline, Evaluator& eval, std::vector<int>&
   struct Change {
     int vertex;
     std::vector<Point2> knots;
+    std::vector<std::pair<int, Point3>> control_points;
   };
   std::vector<Change> log;
   struct Worker {
@@ -220,6 +331,7 @@ KnotSweepStats optimize_knots(Spline& spline, Evaluator& eval, std::vector<int>&
       for (int k = 0; k <= n; ++k)
         if (s.knot(ch.vertex, k) != ch.knots[k]) s.set_knot(ch.vertex, k, ch.knots[k]);
       if (e) e->update_knots(ch.vertex);
+      for (const auto& [index, p] : ch.control_points) s.control_points()[index] = p;
     }
   };
 
@@ -232,7 +344,7 @@ KnotSweepStats optimize_knots(Spline& spline, Evaluator& eval, std::vector<int>&
       if (!w.spline) {
         w.spline = std::make_unique<Spline>(spline);
         w.eval = std::make_unique<Evaluator>(*w.spline);
-        w.synced = log_size;
+        w.synced = 0;  // a copy of the pass-start state: replay every earlier class's changes
       }
       sync(*w.spline, w.eval.get(), w.synced, log_size);
       w.synced = log_size;
@@ -261,7 +373,7 @@ KnotSweepStats optimize_knots(Spline& spline, Evaluator& eval, std::vector<int>&
       stats.energy_after += r.after;
       if (!r.moved) continue;
       ++stats.moved;
-      log.push_back({cls[q], r.knots});
+      log.push_back({cls[q], r.knots, r.control_points});
       if (r.primary_moved) on_primary_move(cls[q], r.knots[0]);
     }
   }

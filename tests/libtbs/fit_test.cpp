@@ -358,7 +358,15 @@ TEST(Fit, NoisySmoothSurfaceWithinToleranceAndNoise) {
     last_cp = r.report.control_points;
     last_err = r.report.max_error;
     if (tol == 1e-3) {
-      EXPECT_LE(r.report.rms_error_abs, 1.5 * sigma);
+      // Free knots (the default) reach the tolerance with fewer control points, so the RMS
+      // error sits further above the noise (measured: 169 control points, RMS 1.62 sigma);
+      // with fixed knots the refinement alone decides (304, 1.14 sigma).
+      EXPECT_LE(r.report.rms_error_abs, 2 * sigma);
+      o.knot_sweeps = 0;
+      const FitResult fixed = fit(s, o);
+      EXPECT_TRUE(fixed.report.converged);
+      EXPECT_LE(fixed.report.rms_error_abs, 1.5 * sigma);
+      EXPECT_LT(r.report.control_points, fixed.report.control_points);
     }
   }
 }
@@ -382,6 +390,46 @@ TEST(Fit, FreeKnotsBeatFixedKnots) {
   EXPECT_EQ(free.report.control_points, fixed.report.control_points);
   EXPECT_LT(free.report.rms_error, 0.97 * fixed.report.rms_error)
       << "free " << free.report.rms_error << " fixed " << fixed.report.rms_error;
+}
+
+// Issue 19's free-knot gain: the knot search judges a move with the control points of the
+// moved vertex's star solved again, so moves that pay after the solve are found. On a wavy
+// sheet at equal control points it lowers the RMS error by far more than the 3 % above; taken
+// to the tolerance it needs fewer control points.
+TEST(Fit, FreeKnotsLowerTheErrorOfAWavySheet) {
+  auto f = [](double u, double v) { return Point3(u, v, 0.05 * std::sin(20 * u) * std::sin(16 * v)); };
+  const Scan s = random_scan(f, 12000, 21);
+  FitOptions o;
+  o.triangles = 60;
+  o.max_iterations = 0;
+  o.knot_sweeps = 0;
+  const FitResult fixed = fit(s, o);
+  o.knot_sweeps = 3;
+  const FitResult free = fit(s, o);
+  EXPECT_EQ(free.report.control_points, fixed.report.control_points);
+  EXPECT_LT(free.report.rms_error, 0.8 * fixed.report.rms_error)
+      << "free " << free.report.rms_error << " fixed " << fixed.report.rms_error;
+  EXPECT_EQ(free.report.folds, 0);
+
+  // To the tolerance: fewer control points with free knots.
+  o.max_iterations = 25;
+  o.knot_sweeps = 0;
+  const FitResult fixed_all = fit(s, o);
+  o.knot_sweeps = 3;
+  const FitResult free_all = fit(s, o);
+  ASSERT_TRUE(fixed_all.report.converged);
+  ASSERT_TRUE(free_all.report.converged);
+  EXPECT_LT(free_all.report.control_points, 0.9 * fixed_all.report.control_points)
+      << "free " << free_all.report.control_points << " fixed " << fixed_all.report.control_points;
+  EXPECT_EQ(free_all.report.folds, 0);
+
+  // Moved knots and re-solved control points do not depend on the thread count.
+  o.threads = 1;
+  const FitResult one = fit(s, o);
+  o.threads = 2;
+  const FitResult two = fit(s, o);
+  EXPECT_EQ(format_tbs(SplineFile{one.spline, "mm", one.report.to_json(false)}),
+            format_tbs(SplineFile{two.spline, "mm", two.report.to_json(false)}));
 }
 
 TEST(Fit, MemoryEstimateGrowsWithPointsDegreeAndControlPoints) {

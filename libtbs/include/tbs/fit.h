@@ -58,9 +58,11 @@ struct FitOptions {
   int max_control_points = 0;
   /// Most refinement rounds.
   int max_iterations = 25;
-  /// OptimizeKnot passes over the vertices after each control-point solve; 0 keeps the knots
-  /// where the default placement puts them (fixed knots).
-  int knot_sweeps = 1;
+  /// Most OptimizeKnot passes over the vertices per refinement round, each followed by a
+  /// control-point solve; they stop early when one lowers the local energies by less than 1 %.
+  /// A move is judged with the control points of the vertex's star solved again on the local
+  /// points. 0 keeps the knots where the default placement puts them (fixed knots).
+  int knot_sweeps = 3;
   /// Memory limit in bytes, against estimate_fit_memory(): a fit expected to need more from the
   /// start is refused (InvalidInput, see check_fit_memory()), and refinement stops before the
   /// spline would need more (stop reason "memory limit"). 0 = no limit.
