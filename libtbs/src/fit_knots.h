@@ -22,8 +22,10 @@ struct KnotSweepStats {
 /// cores) on per-worker copies of the spline, so the result does not depend on the thread
 /// count: a vertex's search sees only the state at the start of its class. Moves only
 /// accepted when the local energy (points located in the 2-ring of s, at most 512 of them taken
-/// evenly by index) falls and every knot
-/// condition still holds: primary knots of interior vertices stay inside their 1-ring (no
+/// evenly by index), with the control points of the star of s solved again on those points for
+/// the candidate knots, falls and every knot condition still holds (a vertex whose star holds
+/// too few points to decide those control points is left alone; an accepted move's control
+/// points are kept in `spline`). The knot conditions: primary knots of interior vertices stay inside their 1-ring (no
 /// triangle flips or collapses), sub-knots within Traas's radius r of the primary knot,
 /// boundary sub-knots outside the domain; boundary primary knots and the knots of feature
 /// vertices stay fixed. `located` is updated for points whose triangle changes;

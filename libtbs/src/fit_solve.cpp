@@ -393,18 +393,4 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
   return out;
 }
 
-double local_energy(const Evaluator& eval, const FitPoints& pts, std::span<const int> points,
-                    double lambda) {
-  double e = 0;
-  for (int i : points) {
-    const SurfacePoint s = eval.evaluate(pts.uv[i]);
-    e += (pts.p[i] - s.position).squaredNorm();
-    if (lambda > 0) {
-      const double a = pts.n[i].dot(s.du), b = pts.n[i].dot(s.dv);
-      e += lambda * pts.fair_weight(i) * (a * a + b * b);
-    }
-  }
-  return e;
-}
-
 }  // namespace tbs::detail

@@ -43,8 +43,4 @@ void group_by_triangle(std::span<const int> triangle, int triangle_count, std::v
 std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& eval,
                                          const FitPoints& pts, double lambda, int threads);
 
-/// sum |p - F(u)|^2 + lambda sum w_i ((n.F_u)^2 + (n.F_v)^2) over the given points.
-double local_energy(const Evaluator& eval, const FitPoints& pts, std::span<const int> points,
-                    double lambda);
-
 }  // namespace tbs::detail
