@@ -382,9 +382,15 @@ int fit_and_write(const FitCommandOptions& o, ParameterizedScan* pscan, const Sc
   }
   SplineFile file{r.spline, o.units, meta.dump(-1, ' ', false, json::error_handler_t::replace)};
   const bool keep = o.keep_points;
+  // The measured points and their parameters, without the guides of a subdivided mesh (they
+  // come after the vertices): what --keep-points stores and error maps show.
+  std::vector<Point3> measured;
+  std::vector<Point2> measured_uv;
+  for (size_t i = 0; i < scan.positions.size(); ++i)
+    if (scan.guide.empty() || !scan.guide[i]) measured.push_back(scan.positions[i]), measured_uv.push_back(r.uv[i]);
   if (keep) {
-    file.points = scan.positions;
-    file.point_parameters = r.uv;
+    file.points = measured;
+    file.point_parameters = measured_uv;
   }
   check_round_trip(file, r, o.input, output);
   write_tbs(output, file);
@@ -404,6 +410,9 @@ int fit_and_write(const FitCommandOptions& o, ParameterizedScan* pscan, const Sc
     std::printf("%-18s %zu left out (fewer than three distinct corners)\n", "degenerate faces", degenerate_faces);
   if (param) print_parameterization(*param);
   std::printf("%-18s %zu\n", "points", rep.points);
+  if (rep.guide_points > 0)
+    std::printf("%-18s %zu of them (added by the subdivision; held with a tenth of the weight, errors not counted)\n",
+                "guide points", rep.guide_points);
   if (rep.points_excluded > 0)
     std::printf("%-18s %zu (outside the largest parameter region)\n", "points left out", rep.points_excluded);
   std::printf("%-18s %d\n", "degree", rep.degree);
@@ -424,8 +433,8 @@ int fit_and_write(const FitCommandOptions& o, ParameterizedScan* pscan, const Sc
     c.output = e;
     if (param) {
       // Computed parameters are not in the scan file: hand the points over directly.
-      c.point_positions = scan.positions;
-      c.point_uv = r.uv;
+      c.point_positions = measured;
+      c.point_uv = measured_uv;
     } else if (!keep) {
       c.points = points_file;
     }

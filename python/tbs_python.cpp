@@ -225,12 +225,19 @@ PySpline fit(const Array& points, const std::optional<Array>& uv, const std::opt
              const std::optional<Faces>& faces, int degree,
              double tolerance, double tolerance_abs, double fairness, double bending, double smoothness, double feature_angle,
              bool features, int triangles, int knot_sweeps, int max_iterations, int threads,
-             const std::optional<py::function>& progress) {
+             const std::optional<py::function>& progress, const std::optional<Array>& guide) {
   if (!uv)
     throw tbs::InvalidInput(
         "uv is required: the module fits points with parameters; tbs.parameterize(points, faces) "
         "computes them for a raw scan, as `tbs fit` does");
-  const tbs::Scan scan = scan_from(points, uv, normals, faces);
+  tbs::Scan scan = scan_from(points, uv, normals, faces);
+  if (guide) {
+    const py::array_t<double, py::array::c_style | py::array::forcecast> g(*guide);
+    if (g.ndim() != 1 || g.shape(0) != static_cast<py::ssize_t>(scan.positions.size()))
+      throw tbs::InvalidInput("guide must have one entry per point");
+    auto r = g.unchecked<1>();
+    for (py::ssize_t i = 0; i < g.shape(0); ++i) scan.guide.push_back(r(i) != 0 ? 1 : 0);
+  }
   tbs::FitOptions o;
   o.degree = degree;
   o.tolerance = tolerance;
@@ -304,6 +311,14 @@ py::dict parameterize(const Array& points, const std::optional<Faces>& faces, co
   auto sm = source.mutable_unchecked<1>();
   for (size_t i = 0; i < p.source.size(); ++i) sm(static_cast<py::ssize_t>(i)) = static_cast<long long>(p.source[i]);
   d["source"] = source;
+  if (p.scan.guide.empty()) {
+    d["guide"] = py::none();
+  } else {
+    py::array_t<bool> guide(static_cast<py::ssize_t>(p.scan.guide.size()));
+    auto gm = guide.mutable_unchecked<1>();
+    for (size_t i = 0; i < p.scan.guide.size(); ++i) gm(static_cast<py::ssize_t>(i)) = p.scan.guide[i] != 0;
+    d["guide"] = guide;
+  }
   d["report"] = json_loads(p.report.to_json());
   return d;
 }
@@ -392,10 +407,12 @@ PYBIND11_MODULE(tbs, m) {
         py::arg("tolerance") = 1e-3, py::arg("tolerance_abs") = 0.0, py::arg("fairness") = 1e-3,
         py::arg("bending") = 1e-4, py::arg("smoothness") = 3e-6, py::arg("feature_angle") = 40.0, py::arg("features") = true,
         py::arg("triangles") = 0, py::arg("knot_sweeps") = 3, py::arg("max_iterations") = 25,
-        py::arg("threads") = 0, py::arg("progress") = py::none(),
+        py::arg("threads") = 0, py::arg("progress") = py::none(), py::arg("guide") = py::none(),
         "Fits one spline to points (N, 3) with parameters uv (N, 2), as `tbs fit` does (the "
         "options and defaults are the same). faces (F, 3), the scan's triangles when it is a "
-        "mesh, let the fit find sharp edges from the dihedral angles, as the command does. progress(stage, message, fraction) is called "
+        "mesh, let the fit find sharp edges from the dihedral angles, as the command does. guide (N,), "
+        "nonzero for guide points (parameterize() returns it for a subdivided mesh): held with a "
+        "tenth of the weight, their errors not measured. progress(stage, message, fraction) is called "
         "between steps; returning False cancels the fit (raises Cancelled), as does Ctrl-C.");
   m.def("parameterize", &parameterize, py::arg("points"), py::arg("faces") = py::none(),
         py::arg("normals") = py::none(), py::arg("method") = "auto", py::arg("component") = 0,
@@ -405,8 +422,8 @@ PYBIND11_MODULE(tbs, m) {
         "closed and flattened (method 'auto': LSCM, or mean-value coordinates if LSCM folds; 'lscm'; "
         "'mean-value'); a point cloud (faces None) is meshed first. min_points > 0 subdivides a coarse "
         "mesh 1-to-4 until it has that many points. Returns a dict: points (M, 3), uv (M, 2), faces "
-        "(F, 3) or None, normals (M, 3) or None, which fit() takes as they are; source (M,), the "
-        "input point of each point; report, as `tbs fit --report` gives it under parameterization. "
+        "(F, 3) or None, normals (M, 3) or None, guide (M,) or None (True for the points the "
+        "subdivision added), which fit() takes as they are; source (M,), the input point of each point; report, as `tbs fit --report` gives it under parameterization. "
         "progress(line) is called between steps.");
   m.def("load", &load, py::arg("path"), "Reads a .tbs file.");
   m.def("read_scan", &read_scan, py::arg("path"), py::arg("max_points") = 50'000'000,

@@ -97,6 +97,7 @@ std::string FitReport::to_json(bool with_times) const {
   nlohmann::ordered_json j;
   j["points"] = points;
   j["points_excluded"] = points_excluded;
+  j["guide_points"] = guide_points;
   j["degree"] = degree;
   j["domain_triangles"] = domain_triangles;
   j["domain_vertices"] = domain_vertices;
@@ -145,6 +146,9 @@ namespace {
 // control points (bench/memory_bench.sh, docs/benchmarks.md "Memory"): within -8 % to +28 %
 // of every row before the safety factor.
 constexpr double kMemoryBase = 30e6;
+
+// Weight of a guide point (Scan::guide) against a measured one, in every term of the fit.
+constexpr double kGuideWeight = 0.1;
 constexpr double kMemoryPerPoint = 360;
 constexpr double kMemoryPerControlPoint = 1000;  // times b^1.5
 constexpr double kMemorySafety = 1.25;
@@ -233,6 +237,16 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
     throw InvalidInput(name + ": " + std::to_string(scan.normals.size()) + " normals for " +
                        std::to_string(N) + " points");
   if (N < 3) throw InvalidInput(name + ": a fit needs at least 3 points, got " + std::to_string(N));
+  if (!scan.guide.empty() && scan.guide.size() != N)
+    throw InvalidInput(name + ": " + std::to_string(scan.guide.size()) + " guide flags for " + std::to_string(N) +
+                       " points");
+  // Guides (Scan::guide) enter the fit with kGuideWeight and are not measured.
+  auto guide = [&](size_t i) { return !scan.guide.empty() && scan.guide[i] != 0; };
+  std::vector<double> weight;
+  if (!scan.guide.empty()) {
+    weight.resize(N);
+    for (size_t i = 0; i < N; ++i) weight[i] = guide(i) ? kGuideWeight : 1.0;
+  }
   for (size_t i = 0; i < N; ++i) {
     if (!scan.positions[i].allFinite() || !scan.uv[i].allFinite() ||
         (scan.has_normals() && !scan.normals[i].allFinite()))
@@ -253,6 +267,7 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
 
   FitResult res;
   FitReport& rep = res.report;
+  rep.guide_points = static_cast<size_t>(std::count_if(scan.guide.begin(), scan.guide.end(), [](std::uint8_t g) { return g != 0; }));
   std::map<std::string, double> stage;
   auto progress = [&](const std::string& st, const std::string& msg, double f) {
     if (opt.stop.stop_requested()) throw Cancelled(name + ": the fit was cancelled (" + st + ")");
@@ -344,8 +359,9 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
     t0 = Clock::now();
     for (size_t i = 0; i < N; ++i) located[i] = fdom.excluded()[i] ? -1 : eval.locate(uv[i]);
     size_t used = 0;
-    for (size_t i = 0; i < N; ++i) used += located[i] >= 0;
-    if (used == 0) throw InvalidInput(name + ": no point lies in the fitting domain");
+    size_t measured = 0;
+    for (size_t i = 0; i < N; ++i) used += located[i] >= 0, measured += located[i] >= 0 && !guide(i);
+    if (measured == 0) throw InvalidInput(name + ": no point lies in the fitting domain");
     rep.points_excluded = N - used;
     stage["domain"] += seconds_since(t0);
 
@@ -381,17 +397,22 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
       jerk.assign(opt.smoothness > 0 ? T : 0, 0.0);
       if (opt.bending > 0 || opt.smoothness > 0) {
         const double total_area = std::accumulate(area.begin(), area.end(), 0.0);
-        const double density = total_area > 0 ? static_cast<double>(start[T]) / total_area : 0.0;
+        // Points counted with their weights (guides).
+        std::vector<double> mass(T, 0.0);
+        for (int t = 0; t < T; ++t)
+          for (int q = start[t]; q < start[t + 1]; ++q) mass[t] += weight.empty() ? 1.0 : weight[order[q]];
+        const double total_mass = std::accumulate(mass.begin(), mass.end(), 0.0);
+        const double density = total_area > 0 ? total_mass / total_area : 0.0;
         const double own = beta_count(n);
         for (int t = 0; t < T; ++t) {
-          const double here = start[t + 1] - start[t];
+          const double here = mass[t];
           const double w = density * (here > own ? (own / here) * (own / here) : 1.0);
           const double h4 = longest2[t] * longest2[t];
           if (!bend.empty()) bend[t] = opt.bending * w * h4;
           if (!jerk.empty()) jerk[t] = opt.smoothness * w * h4 * longest2[t];
         }
       }
-      return detail::FitPoints{scan.positions, normals, uv, located, order, start, fair, bend, jerk};
+      return detail::FitPoints{scan.positions, normals, uv, located, order, start, fair, bend, jerk, weight};
     };
     auto solve = [&] {
       const auto ts = Clock::now();
@@ -419,6 +440,7 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
           continue;
         }
         err[i] = (scan.positions[i] - positions[i]).norm();
+        if (guide(i)) continue;
         sum += err[i] * err[i];
         mx = std::max(mx, err[i]);
         ++cnt;
@@ -439,7 +461,7 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
         const auto ts = Clock::now();
         std::vector<double> tri_err(d.triangle_count(), 0.0);
         for (size_t i = 0; i < N; ++i)
-          if (located[i] >= 0) tri_err[located[i]] = std::max(tri_err[located[i]], err[i]);
+          if (located[i] >= 0 && !guide(i)) tri_err[located[i]] = std::max(tri_err[located[i]], err[i]);
         std::vector<char> want(d.vertex_count(), 0);
         for (int t = 0; t < d.triangle_count(); ++t)
           if (tri_err[t] > rep.tolerance_abs)
@@ -557,7 +579,7 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
     const Domain& d = spline.domain();
     std::vector<double> tri_err(d.triangle_count(), 0.0);
     for (size_t i = 0; i < N; ++i)
-      if (located[i] >= 0) tri_err[located[i]] = std::max(tri_err[located[i]], err[i]);
+      if (located[i] >= 0 && !guide(i)) tri_err[located[i]] = std::max(tri_err[located[i]], err[i]);
     std::vector<int> bad;
     for (int t = 0; t < d.triangle_count(); ++t)
       if (tri_err[t] > rep.tolerance_abs) bad.push_back(t);

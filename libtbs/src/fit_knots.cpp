@@ -88,6 +88,11 @@ class LocalResolve {
         }
       }
       r_.row(i) = (pts_.p[p] - f).transpose();
+      if (!pts_.weight.empty()) {  // guides: rows scaled by the square root of their weight
+        const double s = std::sqrt(pts_.weight[p]);
+        a_.row(i) *= s;
+        r_.row(i) *= s;
+      }
       fu_.row(i) = fu.transpose();
       fv_.row(i) = fv.transpose();
     }

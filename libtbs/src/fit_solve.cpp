@@ -234,11 +234,12 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
             if (loc[a] < 0) throw SolverError("internal: basis function outside its support set");
           }
           const Point3& p = pts.p[i];
+          const double pw = pts.point_weight(i);
           for (size_t a = 0; a < k; ++a) {
             const size_t ra = static_cast<size_t>(loc[a]) * m;
-            const double wa = r.value[a];
+            const double wa = pw * r.value[a];
             for (size_t b = 0; b < k; ++b) L.G[ra + loc[b]] += wa * r.value[b];
-            L.data_diag[loc[a]] += wa * wa;
+            L.data_diag[loc[a]] += wa * r.value[a];
             for (int c = 0; c < 3; ++c) L.rhs[3 * loc[a] + c] += wa * p[c];
           }
           if (fair) {

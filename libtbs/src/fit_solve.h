@@ -28,7 +28,10 @@ struct FitPoints {
   /// Per-triangle weight of the third-order term (empty: none): the integral over triangle t
   /// of |F_uuu|^2 + 3 |F_uuv|^2 + 3 |F_uvv|^2 + |F_vvv|^2, which vanishes on quadratics.
   std::span<const double> jerk = {};
-  double fair_weight(int i) const { return fair.empty() ? 1.0 : fair[i]; }
+  /// Per-point weight of the distance and fairness terms (empty: 1); guides have less.
+  std::span<const double> weight = {};
+  double fair_weight(int i) const { return (fair.empty() ? 1.0 : fair[i]) * point_weight(i); }
+  double point_weight(int i) const { return weight.empty() ? 1.0 : weight[i]; }
 };
 
 /// Groups the points by triangle, in increasing index inside each group.

@@ -829,6 +829,7 @@ ParameterizedScan parameterize_scan(const Scan& scan, const ParameterizeOptions&
       const auto it = index_of.find(key(part.points[origin[v]]));
       const size_t src = it == index_of.end() ? 0 : it->second;
       out.source.push_back(src);
+      if (original < part.points.size()) s.guide.push_back(v >= original ? 1 : 0);
       s.positions.push_back(part.points[v]);
       s.uv.emplace_back(uv[v].x(), uv[v].y());
       if (scan.has_normals()) s.normals.push_back(scan.normals[src].stableNormalized());

@@ -278,6 +278,79 @@ TEST(Fit, BendingHoldsTheSurfaceBetweenSparsePoints) {
   EXPECT_LT(between[1], 0.5 * between[0]);
 }
 
+// Guides (Scan::guide), as a subdivided coarse mesh's new points: they decide the surface
+// between the measured points, but the tolerance is measured at the measured points alone.
+// 9 x 9 points of a wavy sheet on a regular grid, guides on a 4 times finer grid between
+// them: on the sheet, the fit stays near the sheet everywhere; lifted off it between the
+// grid lines (by up to 10 times the tolerance, 0 on the lines, as subdivision points meet the
+// vertices), the fit follows them there and still converges at the measured points.
+TEST(Fit, GuidesHoldTheSurfaceButAreNotMeasured) {
+  auto f = [](double u, double v) { return Point3(u, v, 0.2 * std::sin(3 * u) * std::cos(2 * v)); };
+  auto lift = [](double u, double v) {
+    const double a = std::sin(8 * std::numbers::pi * u), b = std::sin(8 * std::numbers::pi * v);
+    return 0.01 * a * a * b * b;
+  };
+  Scan vertices;
+  for (int j = 0; j <= 8; ++j)
+    for (int i = 0; i <= 8; ++i) {
+      vertices.positions.push_back(f(i / 8.0, j / 8.0));
+      vertices.uv.emplace_back(i / 8.0, j / 8.0);
+    }
+  auto guided = [&](double scale) {
+    Scan s = vertices;
+    s.guide.assign(s.positions.size(), 0);
+    for (int j = 0; j <= 32; ++j)
+      for (int i = 0; i <= 32; ++i) {
+        if (i % 4 == 0 && j % 4 == 0) continue;  // a measured point
+        const double u = i / 32.0, v = j / 32.0;
+        s.positions.push_back(f(u, v) + Point3(0, 0, scale * lift(u, v)));
+        s.uv.emplace_back(u, v);
+        s.guide.push_back(1);
+      }
+    return s;
+  };
+  // The largest distance from f + scale * lift at 1,000 random parameters.
+  auto between = [&](const FitResult& r, double scale) {
+    Evaluator ev(r.spline);
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> uni(0.0, 1.0);
+    double worst = 0;
+    for (int k = 0; k < 1000; ++k) {
+      const Point2 u(uni(rng), uni(rng));
+      worst = std::max(worst, (ev.value(u) - f(u.x(), u.y()) - Point3(0, 0, scale * lift(u.x(), u.y()))).norm());
+    }
+    return worst;
+  };
+  const FitOptions o;
+  const Scan on = guided(0);
+  const FitResult held = fit(on, o);
+  EXPECT_EQ(held.report.guide_points, on.positions.size() - vertices.positions.size());
+  EXPECT_TRUE(held.report.converged) << held.report.stop_reason;
+  EXPECT_LT(between(held, 0), 2 * held.report.tolerance);
+
+  const Scan up = guided(1);
+  const FitResult lifted = fit(up, o);
+  EXPECT_TRUE(lifted.report.converged) << lifted.report.stop_reason;
+  EXPECT_LE(lifted.report.max_error, lifted.report.tolerance);
+  // Between the grid lines the guides lift the surface: on average by a good part of their
+  // own lift (the spline, refined for the measured points only, cannot follow every bump).
+  // Their errors are not measured: some lie farther than the tolerance.
+  Evaluator ev(lifted.spline);
+  double raised = 0, wanted = 0, farthest = 0;
+  for (size_t i = vertices.positions.size(); i < up.positions.size(); ++i) {
+    raised += ev.value(up.uv[i]).z() - on.positions[i].z();
+    wanted += up.positions[i].z() - on.positions[i].z();
+    farthest = std::max(farthest, (ev.value(up.uv[i]) - up.positions[i]).norm());
+  }
+  EXPECT_GT(raised, 0.3 * wanted) << raised / wanted;
+  EXPECT_LT(raised, wanted);
+  EXPECT_GT(farthest, lifted.report.max_error_abs);
+
+  Scan bad = on;
+  bad.guide.pop_back();
+  EXPECT_THROW(fit(bad, o), InvalidInput);
+}
+
 // Issue 19: 8 x 8 points on a saddle, with their (u, v) and no normals, at the default
 // options. More control points than points, so the smoothness term decides the surface between
 // them: it vanishes on quadratics, so the saddle itself is the smoothest surface through them.

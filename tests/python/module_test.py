@@ -195,6 +195,32 @@ if os.path.exists(tarball):
         check(np.array_equal(spline.control_points, tbs.load(out).control_points),
               "%s: parameterize + fit gives the control points of `tbs fit`, bit for bit (%d)"
               % (name, spline.control_points.shape[0]))
+    # A coarse mesh (patch-20, 353 vertices) whose vertices do not reach the tolerance within the
+    # control-point budget: the command subdivides it to --min-points (5000) and fits again, the
+    # new points as guides. parameterize(min_points=5000) returns them flagged; fit(guide=...)
+    # gives the command's spline.
+    with tarfile.open(tarball) as tar:
+        tar.extract("data/meshes/patch-20.off", WORK)
+    path = os.path.join(WORK, "data/meshes/patch-20.off")
+    raw = tbs.read_scan(path)
+    p = tbs.parameterize(raw["points"], raw["faces"], raw["normals"], min_points=5000)
+    g = p["guide"]
+    check(g is not None and g.shape == (p["points"].shape[0],) and int(g.sum()) == p["report"]["points_added"] > 0
+          and not g[:p["points"].shape[0] - int(g.sum())].any(),
+          "parameterize(patch-20, min_points=5000): %d points, the %d added by the subdivision flagged as guides"
+          % (p["points"].shape[0], int(g.sum()) if g is not None else -1))
+    spline = tbs.fit(p["points"], p["uv"], normals=p["normals"], faces=p["faces"], guide=g)
+    out, rep = os.path.join(WORK, "patch-20.tbs"), os.path.join(WORK, "patch-20.json")
+    subprocess.run([TBS, "fit", path, "-o", out, "-q", "--report", rep], check=True, stdout=subprocess.DEVNULL)
+    cli = json.load(open(rep))
+    check(cli["parameterization"]["subdivisions"] > 0 and cli["guide_points"] == int(g.sum())
+          and spline.report["guide_points"] == cli["guide_points"],
+          "patch-20: the command subdivided too, with %d guide points" % cli["guide_points"])
+    check(np.array_equal(spline.control_points, tbs.load(out).control_points),
+          "patch-20: parameterize + fit(guide=...) gives the control points of `tbs fit`, bit for bit (%d)"
+          % spline.control_points.shape[0])
+    expect_raises(tbs.InvalidInput, "fit with a guide array of the wrong length",
+                  lambda: tbs.fit(p["points"], p["uv"], guide=g[:-1]))
     expect_raises(tbs.InvalidInput, "parameterize with an unknown method",
                   lambda: tbs.parameterize(raw["points"], method="harmonic"))
     expect_raises(tbs.InvalidInput, "parameterize of (N, 2) points",

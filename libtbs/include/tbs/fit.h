@@ -91,6 +91,9 @@ struct FitReport {
   /// inside the domain. Their error is NaN. Every other point is located by Evaluator::locate
   /// at its own (u, v): `tbs eval` evaluates it.
   size_t points_excluded = 0;
+  /// Of `points`, the guides (Scan::guide): held with a tenth of the weight, not measured.
+  /// max_error and rms_error are those of the other points.
+  size_t guide_points = 0;
   int degree = 0;
   int domain_triangles = 0;
   int domain_vertices = 0;

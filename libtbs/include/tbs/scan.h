@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
@@ -19,6 +20,11 @@ struct Scan {
   std::vector<Vector3> normals;               ///< empty, or one per position (unit length)
   std::vector<Point2> uv;                     ///< empty, or one per position
   std::vector<std::array<int, 3>> triangles;  ///< empty for bare points; indices into positions
+  /// Empty, or one flag per position: 1 marks a guide, a point that tbs added (a subdivided
+  /// coarse mesh's new points, on a smooth surface through its vertices). Guides hold the
+  /// surface between the measured points with a tenth of their weight; the error and the
+  /// tolerance are measured at the other points only.
+  std::vector<std::uint8_t> guide;
   std::string source;                         ///< the path it was read from
   /// Faces the reader left out: polygons with fewer than three corners, and triangles (of a
   /// polygon's fan) with a repeated corner. (In OBJ, tinyobjloader drops faces with fewer than
