@@ -136,7 +136,8 @@ int main(int argc, char** argv) {
   fit_cmd->add_option("--min-points", fit.min_points,
                       "Scans without (u, v): when a mesh's vertices do not reach the tolerance within the "
                       "control-point budget, it is subdivided 1-to-4 (new points on a smooth surface through "
-                      "the vertices) until it has this many points (at least once) and fitted again; once "
+                      "the vertices) until it has this many points (at least once) and fitted again, the new "
+                      "points as guides (a tenth of the weight, errors measured at the vertices only); once "
                       "more while the fit still stops at the budget with at most 100,000 points; 0 = never")
       ->capture_default_str();
   fit_cmd->add_option("--no-folds", fit.no_folds,
