@@ -280,8 +280,11 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
   rep.bending = opt.bending;
   rep.smoothness = opt.smoothness;
 
+  // The box (and so the relative tolerance) of the measured points: guides do not change it.
+  if (rep.guide_points == N) throw InvalidInput(name + ": every point is a guide; a fit needs measured points");
   Box3 box;
-  for (const auto& p : scan.positions) box.extend(p);
+  for (size_t i = 0; i < N; ++i)
+    if (!guide(i)) box.extend(scan.positions[i]);
   const Vector3 ext = box.max - box.min;
   rep.scale = ext.maxCoeff();
   if (!(rep.scale > 0)) throw InvalidInput(name + ": all points are identical");

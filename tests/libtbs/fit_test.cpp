@@ -349,6 +349,9 @@ TEST(Fit, GuidesHoldTheSurfaceButAreNotMeasured) {
   Scan bad = on;
   bad.guide.pop_back();
   EXPECT_THROW(fit(bad, o), InvalidInput);
+  Scan all = on;
+  std::fill(all.guide.begin(), all.guide.end(), std::uint8_t{1});
+  EXPECT_THROW(fit(all, o), InvalidInput);
 }
 
 // Issue 19: 8 x 8 points on a saddle, with their (u, v) and no normals, at the default
