@@ -383,11 +383,15 @@ int fit_and_write(const FitCommandOptions& o, ParameterizedScan* pscan, const Sc
   SplineFile file{r.spline, o.units, meta.dump(-1, ' ', false, json::error_handler_t::replace)};
   const bool keep = o.keep_points;
   // The measured points and their parameters, without the guides of a subdivided mesh (they
-  // come after the vertices): what --keep-points stores and error maps show.
-  std::vector<Point3> measured;
-  std::vector<Point2> measured_uv;
-  for (size_t i = 0; i < scan.positions.size(); ++i)
-    if (scan.guide.empty() || !scan.guide[i]) measured.push_back(scan.positions[i]), measured_uv.push_back(r.uv[i]);
+  // come after the vertices): what --keep-points stores and error maps show. Copied only
+  // where there are guides to leave out.
+  std::vector<Point3> measured_copy;
+  std::vector<Point2> measured_uv_copy;
+  if (!scan.guide.empty())
+    for (size_t i = 0; i < scan.positions.size(); ++i)
+      if (!scan.guide[i]) measured_copy.push_back(scan.positions[i]), measured_uv_copy.push_back(r.uv[i]);
+  const std::vector<Point3>& measured = scan.guide.empty() ? scan.positions : measured_copy;
+  const std::vector<Point2>& measured_uv = scan.guide.empty() ? r.uv : measured_uv_copy;
   if (keep) {
     file.points = measured;
     file.point_parameters = measured_uv;

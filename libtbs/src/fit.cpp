@@ -146,12 +146,12 @@ namespace {
 // control points (bench/memory_bench.sh, docs/benchmarks.md "Memory"): within -8 % to +28 %
 // of every row before the safety factor.
 constexpr double kMemoryBase = 30e6;
-
-// Weight of a guide point (Scan::guide) against a measured one, in every term of the fit.
-constexpr double kGuideWeight = 0.1;
 constexpr double kMemoryPerPoint = 360;
 constexpr double kMemoryPerControlPoint = 1000;  // times b^1.5
 constexpr double kMemorySafety = 1.25;
+
+// Weight of a guide point (Scan::guide) against a measured one, in every term of the fit.
+constexpr double kGuideWeight = 0.1;
 
 std::string format_bytes(double bytes) {
   char s[32];
