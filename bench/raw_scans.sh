@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Raw scans (no parameters) from Debian's libcgal-demo, for docs/benchmarks.md: each is
-# parameterized and fitted by `tbs fit --tolerance 1e-3`, then written as STEP with the
-# settings of the RawScan tests (CAD tolerance 1e-3, angle tolerance 20 degrees, at most 5000
-# patches; CAD_OPTS overrides them; given up after STEP_TIMEOUT seconds, 300 by default).
+# parameterized and fitted by `tbs fit --tolerance 1e-3`, then written as STEP triangle
+# patches (`--faces triangles`, CAD tolerance 1e-3, angle tolerance 20 degrees, at most 5000
+# patches: the compact patch count of docs/benchmarks.md#raw-scans; CAD_OPTS overrides them;
+# given up after STEP_TIMEOUT seconds, 300 by default).
 # Prints a markdown table: topology, what the parameterization did, its distortion, the fit,
 # the STEP patches and normal deviation, and the wall times and peak memory of the fit and of
 # the STEP export.
@@ -33,7 +34,7 @@ for f in meshes/mask_cone.off meshes/mesh_with_border.off meshes/cylinder.off me
   if [ "${STEP_TIMEOUT:-300}" = 0 ]; then
     echo "skipped 0" > "$out.step.time"
   elif ! /usr/bin/time -f "%e %M" -o "$out.step.time" timeout "${STEP_TIMEOUT:-300}" "$tbs" convert "$out.tbs" "$out.step" \
-       ${CAD_OPTS:---cad-tolerance 1e-3 --angle-tolerance 20 --max-patches 5000} -q > "$out.step.txt" 2>&1; then
+       ${CAD_OPTS:---faces triangles --cad-tolerance 1e-3 --angle-tolerance 20 --max-patches 5000} -q > "$out.step.txt" 2>&1; then
     echo "gave up 0" > "$out.step.time"
   fi
   python3 - "$name" "$out" <<'PY'
@@ -52,7 +53,7 @@ if step[0] == "skipped":
 patches, ndev = "-", "-"
 try:
     for line in open(out + ".step.txt"):
-        if line.startswith("patches "):
+        if line.startswith("content "):  # "content  N triangle patches, ..." or "N region faces, ..."
             patches = line.split()[1]
         if line.startswith("max normal dev."):
             ndev = line.split()[3]
