@@ -66,6 +66,9 @@ constexpr double kNormalStall = 0.75;
 constexpr double kMargin = 2e-3;
 // Resolution of the check lattice in every domain triangle.
 constexpr int kLattice = 8;
+// Regions of at most this many triangles that no chain across splits are cut along a single
+// edge (Regions::cut_small).
+constexpr size_t kSmallRegion = 64;
 
 struct Sample {
   Point2 uv;
@@ -230,7 +233,149 @@ class Regions {
     for (double f : {0.5, 0.3, 0.7, 0.15, 0.85})
       for (int axis : {0, 1})
         if (cut_across(r, tris, box, axis, box.min[axis] + f * (box.max[axis] - box.min[axis]))) return true;
+    // A ring around a hole (an island carved out before, or a hole of the domain) that is too
+    // thin for a chain between two points of its outer loop: cut it in two by chains from
+    // either side of the hole to the outer loop.
+    if (cut_ring(r, tris, ext.x() >= ext.y() ? 0 : 1)) return true;
+    return cut_small(r, tris);
+  }
+
+  // Cuts region r, which has holes, in two along two chains of domain edges, each from a vertex
+  // of a hole's loop to one of the outer loop, through vertices on no border: the shortest
+  // from the hole's low side (along `axis`) and the shortest from its high side that shares no
+  // vertex with the first. False (and r as it was) if there are no such chains or they do not
+  // cut r apart.
+  bool cut_ring(int r, const std::vector<int>& tris, int axis) {
+    const std::vector<std::vector<HalfEdge>> lp = loops(r);
+    if (lp.size() < 2) return false;
+    std::vector<char> in_region(static_cast<size_t>(d_.triangle_count()), 0), on_border(static_cast<size_t>(d_.vertex_count()), 0),
+        outer(on_border.size(), 0);
+    for (int t : tris) in_region[static_cast<size_t>(t)] = 1;
+    for (const auto& l : lp)
+      for (const HalfEdge& h : l) on_border[static_cast<size_t>(h.from)] = 1;
+    for (const HalfEdge& h : lp[0]) outer[static_cast<size_t>(h.from)] = 1;
+    auto inner_edge = [&](int e) {
+      const auto tr = d_.edge_triangles(e);
+      return tr[1] >= 0 && in_region[static_cast<size_t>(tr[0])] && in_region[static_cast<size_t>(tr[1])] &&
+             !border_[static_cast<size_t>(e)];
+    };
+    // The shortest chain from `starts` to the outer loop avoiding `blocked` vertices; its edges.
+    auto chain = [&](const std::vector<int>& starts, const std::vector<char>& blocked) {
+      std::vector<double> dist(on_border.size(), std::numeric_limits<double>::infinity());
+      std::vector<int> from(on_border.size(), -1);
+      using Item = std::pair<double, int>;
+      std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+      for (int v : starts) {
+        dist[static_cast<size_t>(v)] = 0;
+        queue.push({0.0, v});
+      }
+      int goal = -1;
+      while (!queue.empty()) {
+        const auto [dv, a] = queue.top();
+        queue.pop();
+        if (dv > dist[static_cast<size_t>(a)]) continue;
+        if (outer[static_cast<size_t>(a)]) {
+          goal = a;
+          break;
+        }
+        if (from[static_cast<size_t>(a)] >= 0 && on_border[static_cast<size_t>(a)]) continue;
+        for (int e : vertex_edges(a)) {
+          if (!inner_edge(e)) continue;
+          const int b = other(e, a);
+          if (blocked[static_cast<size_t>(b)] || (on_border[static_cast<size_t>(b)] && !outer[static_cast<size_t>(b)])) continue;
+          const double nd = dv + (d_.vertex(b) - d_.vertex(a)).norm();
+          if (nd < dist[static_cast<size_t>(b)]) {
+            dist[static_cast<size_t>(b)] = nd;
+            from[static_cast<size_t>(b)] = e;
+            queue.push({nd, b});
+          }
+        }
+      }
+      std::vector<int> edges;
+      for (int b = goal; b >= 0 && from[static_cast<size_t>(b)] >= 0;) {
+        const int e = from[static_cast<size_t>(b)];
+        edges.push_back(e);
+        b = other(e, b);
+      }
+      return edges;
+    };
+    for (size_t h = 1; h < lp.size(); ++h) {
+      double centre = 0;
+      for (const HalfEdge& e : lp[h]) centre += d_.vertex(e.from)[axis];
+      centre /= static_cast<double>(lp[h].size());
+      std::vector<int> low, high;
+      for (const HalfEdge& e : lp[h]) (d_.vertex(e.from)[axis] < centre ? low : high).push_back(e.from);
+      if (low.empty() || high.empty()) continue;
+      std::vector<char> blocked(on_border.size(), 0);
+      const std::vector<int> first = chain(low, blocked);
+      if (first.empty()) continue;
+      for (int e : first)
+        for (int v : d_.edges()[static_cast<size_t>(e)]) blocked[static_cast<size_t>(v)] = 1;
+      const std::vector<int> second = chain(high, blocked);
+      if (second.empty()) continue;
+      const size_t old_count = members_.size();
+      const std::vector<int> old_labels = label_;
+      std::vector<int> cut = first;
+      cut.insert(cut.end(), second.begin(), second.end());
+      for (int e : cut) border_[static_cast<size_t>(e)] = 1;
+      relabel(r, tris);
+      if (members_.size() > old_count) {
+        for (int e : cut) kind_[static_cast<size_t>(e)] = RegionEdgeKind::Split;
+        return true;
+      }
+      for (int e : cut) border_[static_cast<size_t>(e)] = 0;
+      label_ = old_labels;
+      members_.resize(old_count);
+      members_[static_cast<size_t>(r)] = tris;
+    }
     return false;
+  }
+
+  // Cuts a small region (kSmallRegion triangles at most) in two along one inner domain edge
+  // between two of its border vertices, the one that leaves the two parts closest in size:
+  // for the regions whose border vertices sit where cut_across() finds no sides to join (an
+  // L of four triangles whose inner corner is the centre of its box). False if no edge cuts.
+  bool cut_small(int r, const std::vector<int>& tris) {
+    if (tris.size() < 2 || tris.size() > kSmallRegion) return false;
+    std::vector<char> in_region(static_cast<size_t>(d_.triangle_count()), 0), on_border(static_cast<size_t>(d_.vertex_count()), 0);
+    for (int t : tris) in_region[static_cast<size_t>(t)] = 1;
+    for (const HalfEdge& h : border_half_edges(r)) on_border[static_cast<size_t>(h.from)] = 1;
+    std::vector<int> candidates;
+    for (int t : tris)
+      for (int k = 0; k < 3; ++k) {
+        const int e = d_.triangle_edge(t, k);
+        const auto tr = d_.edge_triangles(e);
+        const auto& ends = d_.edges()[static_cast<size_t>(e)];
+        if (tr[1] >= 0 && tr[0] == t && in_region[static_cast<size_t>(tr[1])] && !border_[static_cast<size_t>(e)] &&
+            on_border[static_cast<size_t>(ends[0])] && on_border[static_cast<size_t>(ends[1])])
+          candidates.push_back(e);
+        if (tr[1] == t && in_region[static_cast<size_t>(tr[0])] && !border_[static_cast<size_t>(e)] &&
+            on_border[static_cast<size_t>(ends[0])] && on_border[static_cast<size_t>(ends[1])])
+          candidates.push_back(e);
+      }
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    const size_t old_count = members_.size();
+    const std::vector<int> old_labels = label_;
+    int best = -1;
+    size_t best_smaller = 0;
+    for (int e : candidates) {
+      border_[static_cast<size_t>(e)] = 1;
+      relabel(r, tris);
+      if (members_.size() == old_count + 1) {
+        const size_t smaller = std::min(members_[static_cast<size_t>(r)].size(), members_.back().size());
+        if (smaller > best_smaller) best_smaller = smaller, best = e;
+      }
+      border_[static_cast<size_t>(e)] = 0;
+      label_ = old_labels;
+      members_.resize(old_count);
+      members_[static_cast<size_t>(r)] = tris;
+    }
+    if (best < 0) return false;
+    border_[static_cast<size_t>(best)] = 1;
+    kind_[static_cast<size_t>(best)] = RegionEdgeKind::Split;
+    relabel(r, tris);
+    return true;
   }
 
   // Cuts the triangles of region r that share a vertex with triangle t out of r, as a region

@@ -253,6 +253,56 @@ TEST(CadRegions, ARegionOverThePoleBudgetIsSplitAlongDomainEdges) {
   for (int n : owner) EXPECT_EQ(n, 1);
 }
 
+// A ring one cell wide around a square hole (4 x 4 cells, the middle 2 x 2 removed): every
+// vertex is on the outer loop or on the hole's, so no chain of domain edges joins two points
+// of the outer loop through the inside. Over the pole budget it is cut in two by chains from
+// the hole to the outer loop (before, it stayed one face over the tolerance: an
+// "unsplittable" region, as rings around islands were on the libcgal-demo head and lion).
+TEST(CadRegions, AThinRingOverThePoleBudgetIsCutFromItsHoleToItsOuterLoop) {
+  std::vector<Point2> v;
+  std::vector<int> id(25, -1);  // grid vertex (i, j) -> domain vertex; the hole's centre has none
+  for (int j = 0; j <= 4; ++j)
+    for (int i = 0; i <= 4; ++i)
+      if (i != 2 || j != 2) {
+        id[static_cast<size_t>(j * 5 + i)] = static_cast<int>(v.size());
+        v.emplace_back(i / 4.0, j / 4.0);
+      }
+  auto at = [&](int i, int j) { return id[static_cast<size_t>(j * 5 + i)]; };
+  std::vector<std::array<int, 3>> tris;
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i) {
+      if (i >= 1 && i <= 2 && j >= 1 && j <= 2) continue;
+      tris.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      tris.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  const Domain d(v, tris, {});
+  ASSERT_EQ(d.boundary_loops().size(), 2u);
+  Spline s = Spline::with_canonical_map(3, d, default_knots(d, 3));
+  for (int t = 0; t < d.triangle_count(); ++t)
+    for (int i = 0; i < beta_count(3); ++i) {
+      const Point2 b = s.blossom_point(t, beta_at(3, i));
+      const double z = 4 * std::sin(3 * b.x()) * std::cos(2 * b.y());
+      s.control_points()[static_cast<size_t>(s.control_point_index(t, i))] = Point3(40 * b.x(), 40 * b.y(), z);
+    }
+  const CadRegions one = make_cad_regions(s, {.tolerance = 1e-4});
+  ASSERT_EQ(one.faces.size(), 1u);
+  const long poles = static_cast<long>(one.faces[0].surface.poles.size()) / 4;
+  const CadRegions r = make_cad_regions(s, {.tolerance = 1e-4, .max_poles = poles});
+  EXPECT_EQ(r.unsplittable, 0) << r.faces.size() << " faces, " << r.budget_splits << " splits, " << r.islands << " islands";
+  EXPECT_GE(r.budget_splits, 1);
+  EXPECT_GE(r.faces.size(), 2u);
+  for (const RegionFace& f : r.faces) {
+    EXPECT_LE(static_cast<long>(f.surface.poles.size()), poles);
+    EXPECT_EQ(f.loops.size(), 1u) << "no face is a ring any more";
+  }
+  EXPECT_TRUE(r.within_tolerance) << "position " << r.max_position_deviation << ", normals " << r.max_normal_deviation;
+  expect_within_tolerance(s, r);
+  std::vector<int> owner(static_cast<size_t>(d.triangle_count()), 0);
+  for (const RegionFace& f : r.faces)
+    for (int t : f.triangles) ++owner[static_cast<size_t>(t)];
+  for (int n : owner) EXPECT_EQ(n, 1);
+}
+
 TEST(CadRegions, LoopsCloseAndEveryEdgeIsUsedOncePerSide) {
   for (const Spline& s : {sheet(3, true, 2), sheet_with_crease_ending_inside(2), sheet(4, true, -1)}) {
     const CadRegions r = make_cad_regions(s, {.tolerance = 1e-3, .max_poles = 400});
