@@ -240,6 +240,22 @@ class Regions {
     return cut_small(r, tris);
   }
 
+  // Whether domain edge e lies inside region r: between two of its triangles, not on a border.
+  bool inner_edge(int e, int r) const {
+    const auto tr = d_.edge_triangles(e);
+    return tr[1] >= 0 && label_[static_cast<size_t>(tr[0])] == r && label_[static_cast<size_t>(tr[1])] == r &&
+           !border_[static_cast<size_t>(e)];
+  }
+
+  // Takes back a cut of region r (its triangles `tris`): the edges `cut` marked as border and
+  // r relabelled, when members_ had `old_count` regions. relabel() touches r's triangles only.
+  void undo_cut(int r, const std::vector<int>& tris, const std::vector<int>& cut, size_t old_count) {
+    for (int e : cut) border_[static_cast<size_t>(e)] = 0;
+    for (int t : tris) label_[static_cast<size_t>(t)] = r;
+    members_.resize(old_count);
+    members_[static_cast<size_t>(r)] = tris;
+  }
+
   // Cuts region r, which has holes, in two along two chains of domain edges, each from a vertex
   // of a hole's loop to one of the outer loop, through vertices on no border: the shortest
   // from the hole's low side (along `axis`) and the shortest from its high side that shares no
@@ -248,17 +264,10 @@ class Regions {
   bool cut_ring(int r, const std::vector<int>& tris, int axis) {
     const std::vector<std::vector<HalfEdge>> lp = loops(r);
     if (lp.size() < 2) return false;
-    std::vector<char> in_region(static_cast<size_t>(d_.triangle_count()), 0), on_border(static_cast<size_t>(d_.vertex_count()), 0),
-        outer(on_border.size(), 0);
-    for (int t : tris) in_region[static_cast<size_t>(t)] = 1;
+    std::vector<char> on_border(static_cast<size_t>(d_.vertex_count()), 0), outer(on_border.size(), 0);
     for (const auto& l : lp)
       for (const HalfEdge& h : l) on_border[static_cast<size_t>(h.from)] = 1;
     for (const HalfEdge& h : lp[0]) outer[static_cast<size_t>(h.from)] = 1;
-    auto inner_edge = [&](int e) {
-      const auto tr = d_.edge_triangles(e);
-      return tr[1] >= 0 && in_region[static_cast<size_t>(tr[0])] && in_region[static_cast<size_t>(tr[1])] &&
-             !border_[static_cast<size_t>(e)];
-    };
     // The shortest chain from `starts` to the outer loop avoiding `blocked` vertices; its edges.
     auto chain = [&](const std::vector<int>& starts, const std::vector<char>& blocked) {
       std::vector<double> dist(on_border.size(), std::numeric_limits<double>::infinity());
@@ -280,7 +289,7 @@ class Regions {
         }
         if (from[static_cast<size_t>(a)] >= 0 && on_border[static_cast<size_t>(a)]) continue;
         for (int e : vertex_edges(a)) {
-          if (!inner_edge(e)) continue;
+          if (!inner_edge(e, r)) continue;
           const int b = other(e, a);
           if (blocked[static_cast<size_t>(b)] || (on_border[static_cast<size_t>(b)] && !outer[static_cast<size_t>(b)])) continue;
           const double nd = dv + (d_.vertex(b) - d_.vertex(a)).norm();
@@ -314,7 +323,6 @@ class Regions {
       const std::vector<int> second = chain(high, blocked);
       if (second.empty()) continue;
       const size_t old_count = members_.size();
-      const std::vector<int> old_labels = label_;
       std::vector<int> cut = first;
       cut.insert(cut.end(), second.begin(), second.end());
       for (int e : cut) border_[static_cast<size_t>(e)] = 1;
@@ -323,10 +331,7 @@ class Regions {
         for (int e : cut) kind_[static_cast<size_t>(e)] = RegionEdgeKind::Split;
         return true;
       }
-      for (int e : cut) border_[static_cast<size_t>(e)] = 0;
-      label_ = old_labels;
-      members_.resize(old_count);
-      members_[static_cast<size_t>(r)] = tris;
+      undo_cut(r, tris, cut, old_count);
     }
     return false;
   }
@@ -337,26 +342,19 @@ class Regions {
   // L of four triangles whose inner corner is the centre of its box). False if no edge cuts.
   bool cut_small(int r, const std::vector<int>& tris) {
     if (tris.size() < 2 || tris.size() > kSmallRegion) return false;
-    std::vector<char> in_region(static_cast<size_t>(d_.triangle_count()), 0), on_border(static_cast<size_t>(d_.vertex_count()), 0);
-    for (int t : tris) in_region[static_cast<size_t>(t)] = 1;
+    std::vector<char> on_border(static_cast<size_t>(d_.vertex_count()), 0);
     for (const HalfEdge& h : border_half_edges(r)) on_border[static_cast<size_t>(h.from)] = 1;
     std::vector<int> candidates;
     for (int t : tris)
       for (int k = 0; k < 3; ++k) {
         const int e = d_.triangle_edge(t, k);
-        const auto tr = d_.edge_triangles(e);
         const auto& ends = d_.edges()[static_cast<size_t>(e)];
-        if (tr[1] >= 0 && tr[0] == t && in_region[static_cast<size_t>(tr[1])] && !border_[static_cast<size_t>(e)] &&
-            on_border[static_cast<size_t>(ends[0])] && on_border[static_cast<size_t>(ends[1])])
-          candidates.push_back(e);
-        if (tr[1] == t && in_region[static_cast<size_t>(tr[0])] && !border_[static_cast<size_t>(e)] &&
-            on_border[static_cast<size_t>(ends[0])] && on_border[static_cast<size_t>(ends[1])])
+        if (inner_edge(e, r) && on_border[static_cast<size_t>(ends[0])] && on_border[static_cast<size_t>(ends[1])])
           candidates.push_back(e);
       }
     std::sort(candidates.begin(), candidates.end());
     candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
     const size_t old_count = members_.size();
-    const std::vector<int> old_labels = label_;
     int best = -1;
     size_t best_smaller = 0;
     for (int e : candidates) {
@@ -366,10 +364,7 @@ class Regions {
         const size_t smaller = std::min(members_[static_cast<size_t>(r)].size(), members_.back().size());
         if (smaller > best_smaller) best_smaller = smaller, best = e;
       }
-      border_[static_cast<size_t>(e)] = 0;
-      label_ = old_labels;
-      members_.resize(old_count);
-      members_[static_cast<size_t>(r)] = tris;
+      undo_cut(r, tris, {e}, old_count);
     }
     if (best < 0) return false;
     border_[static_cast<size_t>(best)] = 1;
@@ -406,7 +401,6 @@ class Regions {
         border_[static_cast<size_t>(e)] = 1;
         cut.push_back(e);
       }
-    const std::vector<int> old_labels = label_;
     const size_t old_count = members_.size();
     relabel(r, tris);
     // No pinch: every vertex of the cut is passed once by each region's border.
@@ -421,10 +415,7 @@ class Regions {
         }
     }
     if (!simple) {
-      for (int e : cut) border_[static_cast<size_t>(e)] = 0;
-      label_ = old_labels;
-      members_.resize(old_count);
-      members_[static_cast<size_t>(r)] = tris;
+      undo_cut(r, tris, cut, old_count);
       return false;
     }
     for (int e : cut) kind_[static_cast<size_t>(e)] = RegionEdgeKind::Split;
@@ -547,13 +538,6 @@ class Regions {
     for (const HalfEdge& h : lp[0]) outer[static_cast<size_t>(h.from)] = 1;
     auto side = [&](int v) { return d_.vertex(v)[across] < centre ? 0 : 1; };
     auto end_cost = [&](int v) { return 20 * std::fabs(d_.vertex(v)[axis] - mid); };
-    std::vector<char> in_region(static_cast<size_t>(d_.triangle_count()), 0);
-    for (int t : tris) in_region[static_cast<size_t>(t)] = 1;
-    auto inner_edge = [&](int e) {
-      const auto tr = d_.edge_triangles(e);
-      return tr[1] >= 0 && in_region[static_cast<size_t>(tr[0])] && in_region[static_cast<size_t>(tr[1])] &&
-             !border_[static_cast<size_t>(e)];
-    };
     std::vector<double> dist(outer.size(), std::numeric_limits<double>::infinity());
     std::vector<int> from(outer.size(), -1), source(outer.size(), -1);
     using Item = std::pair<double, int>;
@@ -573,7 +557,7 @@ class Regions {
       if (dv > dist[static_cast<size_t>(a)]) continue;
       if (source[static_cast<size_t>(a)] != a && on_border[static_cast<size_t>(a)]) continue;
       for (int e : vertex_edges(a)) {
-        if (!inner_edge(e)) continue;
+        if (!inner_edge(e, r)) continue;
         const int b = other(e, a);
         const Point2 &pa = d_.vertex(a), &pb = d_.vertex(b);
         const double off = 0.5 * (std::fabs(pa[axis] - mid) + std::fabs(pb[axis] - mid)) / extent;
