@@ -12,6 +12,7 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_for_each.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -22,6 +23,7 @@
 #include <map>
 #include <mutex>
 #include <numeric>
+#include <optional>
 #include <queue>
 
 namespace tbs {
@@ -193,6 +195,27 @@ class Regions {
       ++extended;
     }
     return {extended, left};
+  }
+
+  // Numbers the regions by their smallest triangle, as label_all() does: the numbering that
+  // splits made depends on the order in which they happened. Returns the old number of each
+  // new one.
+  std::vector<int> renumber() {
+    std::vector<std::pair<int, int>> first;  // (smallest triangle, region)
+    for (int r = 0; r < region_count(); ++r) {
+      const auto& m = members_[static_cast<size_t>(r)];
+      first.emplace_back(m.empty() ? std::numeric_limits<int>::max() : *std::min_element(m.begin(), m.end()), r);
+    }
+    std::sort(first.begin(), first.end());
+    std::vector<std::vector<int>> members(members_.size());
+    for (size_t k = 0; k < first.size(); ++k) {
+      members[k] = std::move(members_[static_cast<size_t>(first[k].second)]);
+      for (int t : members[k]) label_[static_cast<size_t>(t)] = static_cast<int>(k);
+    }
+    members_ = std::move(members);
+    std::vector<int> old(first.size());
+    for (size_t k = 0; k < first.size(); ++k) old[k] = first[k].second;
+    return old;
   }
 
   // Labels the triangles: connected across edges that are not borders, numbered by their
@@ -701,11 +724,6 @@ class TensorSystem {
     a.setFromTriplets(entries.begin(), entries.end());
     // CHOLMOD's supernodal factorization: the pole grid is a 2D stencil of (2p+1)^2 entries per
     // row, where Eigen's simplicial LDLT spent 70 % of a region fit.
-    // One factorization at a time: CHOLMOD's supernodal kernels call BLAS, and a single-threaded
-    // BLAS (Debian's libopenblas0-serial, say) is not safe to call from two threads at once;
-    // concurrent calls gave different results from run to run.
-    static std::mutex blas;
-    std::lock_guard lock(blas);
     Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> chol;
     chol.setMode(Eigen::CholmodSupernodalLLt);
     chol.cholmod().print = 0;  // a failed factorization is handled by the caller, not printed
@@ -713,7 +731,15 @@ class TensorSystem {
     // solution, and with it which knots get inserted.
     chol.cholmod().nmethods = 1;
     chol.cholmod().method[0].ordering = CHOLMOD_AMD;
-    chol.compute(a);
+    // The ordering and the symbolic analysis call no BLAS and run in parallel.
+    chol.analyzePattern(a);
+    if (chol.info() != Eigen::Success) return {};
+    // One numeric factorization at a time: CHOLMOD's supernodal kernels call BLAS, and a
+    // single-threaded BLAS (Debian's libopenblas0-serial, say) is not safe to call from two
+    // threads at once; concurrent calls gave different results from run to run.
+    static std::mutex blas;
+    std::lock_guard lock(blas);
+    chol.factorize(a);
     if (chol.info() != Eigen::Success) return {};
     const Eigen::MatrixX3d x = chol.solve(rhs_);
     if (chol.info() != Eigen::Success || !x.allFinite()) return {};
@@ -762,10 +788,23 @@ class TensorSystem {
   Eigen::MatrixX3d rhs_;
 };
 
+// What a fit needs of its region, copied while no other fit changes the regions: its
+// triangles, its border half-edges and which triangles of the domain it holds.
+struct RegionView {
+  std::vector<int> triangles;
+  std::vector<Regions::HalfEdge> border;
+  std::vector<char> inside;
+  RegionView(const Regions& regions, int r)
+      : triangles(regions.triangles(r)), border(regions.border_half_edges(r)),
+        inside(static_cast<size_t>(regions.domain().triangle_count()), 0) {
+    for (int t : triangles) inside[static_cast<size_t>(t)] = 1;
+  }
+  bool holds(int t) const { return t >= 0 && inside[static_cast<size_t>(t)]; }
+};
+
 struct Context {
   const Spline& spline;
   const Evaluator& ev;
-  const Regions& regions;
   const CadRegionOptions& o;
   double tol = 0;
   double angle = 0;  // the normal limit: half the angle tolerance
@@ -847,7 +886,7 @@ void border_samples(const Context& c, const std::vector<Regions::HalfEdge>& bord
 }
 
 // Points of the rectangle grid given by (us x vs) that lie in region r, evaluated.
-void grid_samples(const Context& c, int r, const std::vector<double>& us, const std::vector<double>& vs,
+void grid_samples(const Context& c, const RegionView& rv, const std::vector<double>& us, const std::vector<double>& vs,
                   bool derivatives, std::vector<Sample>& out) {
   std::vector<Point2> pts;
   std::vector<char> compare;
@@ -856,7 +895,7 @@ void grid_samples(const Context& c, int r, const std::vector<double>& us, const 
     for (double u : us) {
       const Point2 p(u, v);
       const int t = c.ev.locate(p);
-      if (t >= 0 && c.regions.label(t) == r) {
+      if (rv.holds(t)) {
         pts.push_back(p);
         compare.push_back(false);
       }
@@ -900,9 +939,9 @@ constexpr double kSlowRate = 1.0;
 
 // Fits region r. With `early`, stops as soon as the last rounds project a pole count over
 // kProjectedOver times the budget (the caller then splits the region).
-FitResult fit_region(const Context& c, int r, bool early) {
+FitResult fit_region(const Context& c, const RegionView& rv, bool early) {
   const Domain& d = c.spline.domain();
-  const std::vector<int>& tris = c.regions.triangles(r);
+  const std::vector<int>& tris = rv.triangles;
   const int p = c.o.degree;
   Box2 box;
   double area = 0;
@@ -915,7 +954,7 @@ FitResult fit_region(const Context& c, int r, bool early) {
   const double margin = kMargin * std::max(size.x(), size.y());
   const Point2 lo = box.min - Vector2::Constant(margin), hi = box.max + Vector2::Constant(margin);
   const double h = std::sqrt(2 * area / static_cast<double>(tris.size()));
-  const auto border = c.regions.border_half_edges(r);
+  const auto& border = rv.border;
 
   // The fixed part of the check: the lattice of every triangle of the region.
   std::vector<Sample> lattice;
@@ -970,7 +1009,7 @@ FitResult fit_region(const Context& c, int r, bool early) {
 
     // Fit samples: 4 x 4 per cell (with derivatives), and the border.
     std::vector<Sample> fit;
-    grid_samples(c, r, inner_points(bu, std::min(p, 3)), inner_points(bv, std::min(p, 3)), true, fit);
+    grid_samples(c, rv, inner_points(bu, std::min(p, 3)), inner_points(bv, std::min(p, 3)), true, fit);
     border_samples(c, border, min_span / (p + 1), 0.0, fit);
     // Thin plate per cell: relative to the data a cell holds, 4 x 4 samples.
     const double per_cell = 16;
@@ -980,7 +1019,7 @@ FitResult fit_region(const Context& c, int r, bool early) {
         const double hu = bu[i + 1] - bu[i], hv = bv[j + 1] - bv[j], hm = std::max(hu, hv);
         const Point2 centre(0.5 * (bu[i] + bu[i + 1]), 0.5 * (bv[j] + bv[j + 1]));
         const int t = c.ev.locate(centre);
-        const bool inside = t >= 0 && c.regions.label(t) == r;
+        const bool inside = rv.holds(t);
         lambda.push_back((inside ? kSmoothInside : kSmoothOutside) * per_cell * hm * hm * hm * hm / (hu * hv));
       }
     // A system that cannot be factored, or whose solution misses its own samples by far more
@@ -1012,7 +1051,7 @@ FitResult fit_region(const Context& c, int r, bool early) {
     // Check samples: breaks and midpoints of the grid, the border between the fit samples,
     // and the triangle lattices.
     std::vector<Sample> check;
-    grid_samples(c, r, breaks_and_midpoints(bu), breaks_and_midpoints(bv), true, check);
+    grid_samples(c, rv, breaks_and_midpoints(bu), breaks_and_midpoints(bv), true, check);
     border_samples(c, border, min_span / (p + 1), 0.5, check);
     check.insert(check.end(), lattice.begin(), lattice.end());
     double pos_dev = 0, normal_dev = 0;
@@ -1247,7 +1286,7 @@ CadRegions make_cad_regions(const Spline& spline, const CadRegionOptions& o) {
     regions.label_all();
     out.smooth_regions = regions.region_count();
 
-    Context c{spline, ev, regions, o, out.tolerance, o.angle_tolerance / 2, {}, {}, {}};
+    Context c{spline, ev, o, out.tolerance, o.angle_tolerance / 2, {}, {}, {}};
     c.near_tip.assign(static_cast<size_t>(d.triangle_count()), 0);
     for (int v : regions.crease_tips())
       for (int t : d.vertex_triangles(v)) c.near_tip[static_cast<size_t>(t)] = 1;
@@ -1267,41 +1306,53 @@ CadRegions make_cad_regions(const Spline& spline, const CadRegionOptions& o) {
         }
     });
 
-    // Fit every pending region (in parallel); split those over the budget, in label order,
-    // and fit their parts in the next round.
-    std::vector<FitResult> fits;
-    std::vector<int> pending(static_cast<size_t>(regions.region_count()));
-    std::iota(pending.begin(), pending.end(), 0);
+    // Fit every region, in parallel; split one over the budget and fit its parts as soon as its
+    // fit is done (no round waits for its slowest region). Each fit sees a copy of its region
+    // taken under the lock, and a split changes only the region it splits, so the regions that
+    // come out do not depend on the order in which fits finish; their numbers do, and are made
+    // canonical afterwards.
+    std::vector<FitResult> fits(static_cast<size_t>(regions.region_count()));
     // Regions that can be split no further: fitted to the whole budget, without projection.
-    std::vector<char> to_budget(pending.size(), 0);
-    while (!pending.empty()) {
-      fits.resize(static_cast<size_t>(regions.region_count()));
-      to_budget.resize(fits.size(), 0);
-      tbb::parallel_for(size_t(0), pending.size(), [&](size_t i) {
-        const int r = pending[i];
-        fits[static_cast<size_t>(r)] = fit_region(c, r, !to_budget[static_cast<size_t>(r)]);
-      });
-      std::vector<int> next;
-      for (int r : pending) {
-        const FitResult& f = fits[static_cast<size_t>(r)];
-        if (!f.over_budget) continue;
-        const int before = regions.region_count();
-        if (f.slow_spot && regions.carve(r, nearest_triangle(d, regions.triangles(r), f.worst))) {
-          ++out.islands;
-        } else if (regions.split(r, f.worst)) {
-          ++out.budget_splits;
-        } else if (f.projected) {
-          to_budget[static_cast<size_t>(r)] = 1;
-          next.push_back(r);
-          continue;
-        } else {
-          ++out.unsplittable;
-          continue;
-        }
-        next.push_back(r);
-        for (int k = before; k < regions.region_count(); ++k) next.push_back(k);
+    std::vector<char> to_budget(fits.size(), 0);
+    std::vector<int> first(fits.size());
+    std::iota(first.begin(), first.end(), 0);
+    std::mutex lock;
+    tbb::parallel_for_each(first.begin(), first.end(), [&](int r, tbb::feeder<int>& feeder) {
+      const auto rr = static_cast<size_t>(r);
+      std::optional<RegionView> view;
+      bool early = true;
+      {
+        std::lock_guard guard(lock);
+        view.emplace(regions, r);
+        early = !to_budget[rr];
       }
-      pending = std::move(next);
+      FitResult f = fit_region(c, *view, early);
+      std::lock_guard guard(lock);
+      if (f.over_budget) {
+        const int before = regions.region_count();
+        bool again = true;
+        if (f.slow_spot && regions.carve(r, nearest_triangle(d, regions.triangles(r), f.worst)))
+          ++out.islands;
+        else if (regions.split(r, f.worst))
+          ++out.budget_splits;
+        else if (f.projected)
+          to_budget[rr] = 1;
+        else
+          again = false, ++out.unsplittable;
+        fits.resize(static_cast<size_t>(regions.region_count()));
+        to_budget.resize(fits.size(), 0);
+        if (again) {
+          feeder.add(r);
+          for (int k = before; k < regions.region_count(); ++k) feeder.add(k);
+        }
+      }
+      fits[rr] = std::move(f);
+    });
+    {
+      const std::vector<int> order = regions.renumber();
+      std::vector<FitResult> sorted(fits.size());
+      for (size_t k = 0; k < order.size(); ++k) sorted[k] = std::move(fits[static_cast<size_t>(order[k])]);
+      fits = std::move(sorted);
     }
 
     // Faces.
