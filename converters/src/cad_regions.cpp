@@ -15,6 +15,8 @@
 #include <tbb/parallel_for_each.h>
 #include <tbb/task_arena.h>
 
+#include <dlfcn.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -638,6 +640,43 @@ class Regions {
 
 // Least squares on a tensor-product B-spline space: the normal equations in a band over the
 // pole grid (pole (i, j) couples with poles within degree steps in each direction).
+// Runs the OpenMP parallel regions started on this thread on this thread alone, while it
+// lives. Debian's CHOLMOD runs loops of its supernodal factorization as OpenMP regions of
+// CHOLMOD_OMP_NUM_THREADS (4) threads; region fits already run on every core through TBB, and
+// the OpenMP threads on top only wait for each other (head.off's region faces: 44.5 -> 36.1 s,
+// the same bytes). tbs reaches OpenMP through CHOLMOD alone, so its runtime is looked up, not
+// linked: without it (a CHOLMOD built without OpenMP) there is nothing to do.
+class SerialOpenMp {
+ public:
+  SerialOpenMp() {
+    if (!api().set) return;
+    old_ = api().get();
+    api().set(0);
+  }
+  ~SerialOpenMp() {
+    if (api().set) api().set(old_);
+  }
+  SerialOpenMp(const SerialOpenMp&) = delete;
+  SerialOpenMp& operator=(const SerialOpenMp&) = delete;
+
+ private:
+  struct Api {
+    int (*get)() = nullptr;
+    void (*set)(int) = nullptr;
+  };
+  static const Api& api() {
+    static const Api found = [] {
+      Api a;
+      a.get = reinterpret_cast<int (*)()>(dlsym(RTLD_DEFAULT, "omp_get_max_active_levels"));
+      a.set = reinterpret_cast<void (*)(int)>(dlsym(RTLD_DEFAULT, "omp_set_max_active_levels"));
+      if (!a.get || !a.set) a = Api{};
+      return a;
+    }();
+    return found;
+  }
+  int old_ = 0;
+};
+
 class TensorSystem {
  public:
   TensorSystem(int p, const std::vector<double>& ku, const std::vector<double>& kv)
@@ -674,8 +713,9 @@ class TensorSystem {
         if (order) r += wd * (wu[ab] * fu.transpose() + wv[ab] * fv.transpose());
         rhs_.row(k) += r;
         double* row = &band_[static_cast<size_t>(k) * static_cast<size_t>(w_ * w_)];
-        for (int d = 0; d < n; ++d)
-          for (int c = 0; c < n; ++c) {
+        // The lower triangle only (pole cd at or before pole ab): solve() reads no other.
+        for (int d = 0; d <= b; ++d)
+          for (int c = 0; c < (d < b ? n : a + 1); ++c) {
             const int cd = c + n * d;
             double v = w[ab] * w[cd];
             if (order) v += wd * (wu[ab] * wu[cd] + wv[ab] * wv[cd]);
@@ -695,8 +735,8 @@ class TensorSystem {
       for (int a = 0; a < n; ++a) {
         const int k = i0 + a + nu_ * (j0 + b);
         double* row = &band_[static_cast<size_t>(k) * static_cast<size_t>(w_ * w_)];
-        for (int d = 0; d < n; ++d)
-          for (int c = 0; c < n; ++c)
+        for (int d = 0; d <= b; ++d)  // the lower triangle, as in add_sample()
+          for (int c = 0; c < (d < b ? n : a + 1); ++c)
             row[(c - a + p_) + w_ * (d - b + p_)] +=
                 lambda * (mu[2][a][c] * mv[0][b][d] + 2 * mu[1][a][c] * mv[1][b][d] + mu[0][a][c] * mv[2][b][d]);
       }
@@ -739,7 +779,10 @@ class TensorSystem {
     // threads at once; concurrent calls gave different results from run to run.
     static std::mutex blas;
     std::lock_guard lock(blas);
-    chol.factorize(a);
+    {
+      const SerialOpenMp serial;
+      chol.factorize(a);
+    }
     if (chol.info() != Eigen::Success) return {};
     const Eigen::MatrixX3d x = chol.solve(rhs_);
     if (chol.info() != Eigen::Success || !x.allFinite()) return {};
@@ -885,7 +928,7 @@ void border_samples(const Context& c, const std::vector<Regions::HalfEdge>& bord
   }
 }
 
-// Points of the rectangle grid given by (us x vs) that lie in region r, evaluated.
+// Points of the rectangle grid given by (us x vs) that lie in the region, evaluated.
 void grid_samples(const Context& c, const RegionView& rv, const std::vector<double>& us, const std::vector<double>& vs,
                   bool derivatives, std::vector<Sample>& out) {
   std::vector<Point2> pts;
