@@ -713,14 +713,21 @@ class TensorSystem {
         if (order) r += wd * (wu[ab] * fu.transpose() + wv[ab] * fv.transpose());
         rhs_.row(k) += r;
         double* row = &band_[static_cast<size_t>(k) * static_cast<size_t>(w_ * w_)];
-        // The lower triangle only (pole cd at or before pole ab): solve() reads no other.
-        for (int d = 0; d <= b; ++d)
-          for (int c = 0; c < (d < b ? n : a + 1); ++c) {
-            const int cd = c + n * d;
-            double v = w[ab] * w[cd];
-            if (order) v += wd * (wu[ab] * wu[cd] + wv[ab] * wv[cd]);
-            row[(c - a + p_) + w_ * (d - b + p_)] += v;
+        // The lower triangle only (pole cd at or before pole ab): solve() reads no other. One
+        // row of poles at a time, a contiguous run in both the weights and the band.
+        const double x = w[ab], xu = order ? wu[ab] : 0.0, xv = order ? wv[ab] : 0.0;
+        for (int d = 0; d <= b; ++d) {
+          const int cn = d < b ? n : a + 1;
+          double* __restrict out = row + (p_ - a) + w_ * (d - b + p_);
+          const double* __restrict w0 = w + n * d;
+          if (order) {
+            const double* __restrict u0 = wu + n * d;
+            const double* __restrict v0 = wv + n * d;
+            for (int c = 0; c < cn; ++c) out[c] += x * w0[c] + wd * (xu * u0[c] + xv * v0[c]);
+          } else {
+            for (int c = 0; c < cn; ++c) out[c] += x * w0[c];
           }
+        }
       }
   }
 
