@@ -688,11 +688,19 @@ class TensorSystem {
 
   // A sample of the value f and, with weight wd > 0, of the partial derivatives fu, fv.
   void add_sample(const Point2& uv, const Point3& f, const Vector3& fu, const Vector3& fv, double wd) {
-    const int su = find_span(ku_, p_, uv.x()), sv = find_span(kv_, p_, uv.y());
-    Basis bu, bv;
     const int order = wd > 0 ? 1 : 0;
+    const int su = find_span(ku_, p_, uv.x());
+    Basis bu;
     basis_functions(ku_, p_, su, uv.x(), order, bu);
-    basis_functions(kv_, p_, sv, uv.y(), order, bv);
+    // Grid samples come row by row: the v basis of the last sample is often this one's.
+    if (!(uv.y() == last_v_ && order == last_order_)) {
+      last_sv_ = find_span(kv_, p_, uv.y());
+      basis_functions(kv_, p_, last_sv_, uv.y(), order, last_bv_);
+      last_v_ = uv.y();
+      last_order_ = order;
+    }
+    const int sv = last_sv_;
+    const Basis& bv = last_bv_;
     constexpr int kN = (detail::kMaxBasisDegree + 1) * (detail::kMaxBasisDegree + 1);
     double w[kN], wu[kN], wv[kN];
     const int n = p_ + 1;
@@ -836,6 +844,9 @@ class TensorSystem {
   int nu_, nv_, w_;
   std::vector<double> band_;
   Eigen::MatrixX3d rhs_;
+  double last_v_ = std::numeric_limits<double>::quiet_NaN();  // NaN: no sample yet
+  int last_order_ = -1, last_sv_ = 0;
+  Basis last_bv_{};
 };
 
 // What a fit needs of its region, copied while no other fit changes the regions: its
