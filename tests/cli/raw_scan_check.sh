@@ -14,8 +14,7 @@
 #                   not finish in 5 minutes: docs/benchmarks.md#cad-export);
 #          relaxed: region faces as STEP and IGES, and triangle patches, at CAD tolerance 1e-3
 #                   and angle tolerance 20 (these fits fold or stretch: the defaults take
-#                   minutes, docs/benchmarks.md#cad-export);
-#          heavy:   region faces as STEP only, at CAD tolerance 1e-3 and angle tolerance 20.
+#                   minutes, docs/benchmarks.md#cad-export).
 set -euo pipefail
 tbs="$1" work="$2" file="$3" mode="$4"
 here="$(cd "$(dirname "$0")" && pwd)"
@@ -45,20 +44,15 @@ PY
 relaxed=(--cad-tolerance 1e-3 --angle-tolerance 20)
 case "$mode" in
   default|regions) regions=() ;;
-  relaxed|heavy) regions=("${relaxed[@]}") ;;
+  relaxed) regions=("${relaxed[@]}") ;;
   *) echo "unknown mode $mode" >&2; exit 2 ;;
 esac
 "$tbs" convert "$out.tbs" "$out.step" "${regions[@]}" --report "$out.step.json" | tee "$out.step.txt"
-cad=("$out.step")
-if [ "$mode" != heavy ]; then
-  "$tbs" convert "$out.tbs" "$out.igs" "${regions[@]}" --quiet
-  cad+=("$out.igs")
-fi
+"$tbs" convert "$out.tbs" "$out.igs" "${regions[@]}" --quiet
+cad=("$out.step" "$out.igs")
 /usr/bin/python3 "$here/freecad_shape_check.py" "$out.tbs" "$out.step.json" "${cad[@]}"
-if [ "$mode" != heavy ]; then
-  "$tbs" convert "$out.tbs" "$out-triangles.step" --faces triangles "${relaxed[@]}" --quiet
-  test -s "$out-triangles.step"
-fi
+"$tbs" convert "$out.tbs" "$out-triangles.step" --faces triangles "${relaxed[@]}" --quiet
+test -s "$out-triangles.step"
 if [ "$mode" = default ]; then
   "$tbs" convert "$out.tbs" "$out-exact.step" --exact --triangle-patch degenerate --quiet
   test -s "$out-exact.step"
