@@ -18,6 +18,7 @@
 #include <dlfcn.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cmath>
@@ -1378,6 +1379,9 @@ CadRegions make_cad_regions(const Spline& spline, const CadRegionOptions& o) {
     std::vector<int> first(fits.size());
     std::iota(first.begin(), first.end(), 0);
     std::mutex lock;
+    // Progress: regions fitted and regions still to fit (splits add to them).
+    size_t done = 0, to_fit = first.size();
+    auto last_said = std::chrono::steady_clock::now();
     tbb::parallel_for_each(first.begin(), first.end(), [&](int r, tbb::feeder<int>& feeder) {
       const auto rr = static_cast<size_t>(r);
       std::optional<RegionView> view;
@@ -1405,10 +1409,25 @@ CadRegions make_cad_regions(const Spline& spline, const CadRegionOptions& o) {
         if (again) {
           feeder.add(r);
           for (int k = before; k < regions.region_count(); ++k) feeder.add(k);
+          to_fit += 1 + static_cast<size_t>(regions.region_count() - before);
         }
+        done += !again;
+      } else {
+        ++done;
       }
+      --to_fit;
       fits[rr] = std::move(f);
+      const auto now = std::chrono::steady_clock::now();
+      if (o.progress && now - last_said >= std::chrono::seconds(2)) {
+        last_said = now;
+        o.progress("fitting region faces: " + std::to_string(done) + " fitted, " + std::to_string(to_fit) +
+                   " to fit (" + std::to_string(out.budget_splits) + " splits and " + std::to_string(out.islands) +
+                   " islands for the pole budget so far)");
+      }
     });
+    if (o.progress)
+      o.progress("fitted " + std::to_string(done) + " region faces (" + std::to_string(out.budget_splits) +
+                 " splits and " + std::to_string(out.islands) + " islands for the pole budget)");
     {
       const std::vector<int> order = regions.renumber();
       std::vector<FitResult> sorted(fits.size());

@@ -224,6 +224,7 @@ void convert_cad(const SplineFile& file, const std::string& output, const Conver
     co.degree = o.face_degree;
     co.max_poles = o.max_poles;
     co.threads = o.threads;
+    co.progress = o.progress;
     const CadRegions c = make_cad_regions(s, co);
     r.stage_seconds.emplace_back("regions", since(t0));
     r.regions = c.faces.size();

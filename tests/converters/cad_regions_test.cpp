@@ -340,6 +340,19 @@ TEST(CadRegions, TheResultDoesNotDependOnTheThreadCount) {
   for (size_t e = 0; e < a.edges.size(); ++e) EXPECT_EQ(a.edges[e].curve.poles, b.edges[e].curve.poles);
 }
 
+TEST(CadRegions, ProgressEndsWithTheFacesFitted) {
+  const Spline s = sheet(3, true, 2);
+  std::vector<std::string> lines;
+  CadRegionOptions o{.tolerance = 1e-4, .max_poles = 300, .threads = 2};
+  o.progress = [&](const std::string& line) { lines.push_back(line); };  // called one at a time
+  const CadRegions r = make_cad_regions(s, o);
+  ASSERT_GT(r.budget_splits + r.islands, 0);  // regions were split: more fits than faces
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(lines.back(), "fitted " + std::to_string(r.faces.size()) + " region faces (" +
+                              std::to_string(r.budget_splits) + " splits and " + std::to_string(r.islands) +
+                              " islands for the pole budget)");
+}
+
 TEST(CadRegions, OptionsOutOfRangeAreRefused) {
   const Spline s = sheet(2, false, -1);
   EXPECT_THROW(make_cad_regions(s, {.tolerance = 0}), InvalidInput);

@@ -19,6 +19,7 @@
 #include <tbs/spline.h>
 
 #include <array>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -68,6 +69,9 @@ struct CadRegionOptions {
   /// Most poles of one face. A region that needs more is split along domain edges.
   long max_poles = 20'000;
   int threads = 0;  ///< Worker threads, 0 for all cores. The result does not depend on it.
+  /// If set, called with a line of progress while the regions are fitted (every 2 s at most,
+  /// from a worker thread, one call at a time) and once when they all are.
+  std::function<void(const std::string&)> progress = nullptr;
 };
 
 /// How a trim edge came about.
