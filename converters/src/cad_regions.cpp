@@ -26,7 +26,6 @@
 #include <map>
 #include <mutex>
 #include <numeric>
-#include <optional>
 #include <queue>
 
 namespace tbs {
@@ -639,8 +638,6 @@ class Regions {
   std::vector<int> tips_;
 };
 
-// Least squares on a tensor-product B-spline space: the normal equations in a band over the
-// pole grid (pole (i, j) couples with poles within degree steps in each direction).
 // Runs the OpenMP parallel regions started on this thread on this thread alone, while it
 // lives. Debian's CHOLMOD runs loops of its supernodal factorization as OpenMP regions of
 // CHOLMOD_OMP_NUM_THREADS (4) threads; region fits already run on every core through TBB, and
@@ -678,6 +675,8 @@ class SerialOpenMp {
   int old_ = 0;
 };
 
+// Least squares on a tensor-product B-spline space: the normal equations in a band over the
+// pole grid (pole (i, j) couples with poles within degree steps in each direction).
 class TensorSystem {
  public:
   TensorSystem(int p, const std::vector<double>& ku, const std::vector<double>& kv)
@@ -1385,16 +1384,19 @@ CadRegions make_cad_regions(const Spline& spline, const CadRegionOptions& o) {
     // Progress: regions fitted and regions still to fit (splits add to them).
     size_t done = 0, to_fit = first.size();
     auto last_said = std::chrono::steady_clock::now();
+    auto cuts = [&] {
+      return std::to_string(out.budget_splits) + " splits and " + std::to_string(out.islands) +
+             " islands for the pole budget";
+    };
     tbb::parallel_for_each(first.begin(), first.end(), [&](int r, tbb::feeder<int>& feeder) {
       const auto rr = static_cast<size_t>(r);
-      std::optional<RegionView> view;
       bool early = true;
-      {
+      const RegionView view = [&] {
         std::lock_guard guard(lock);
-        view.emplace(regions, r);
         early = !to_budget[rr];
-      }
-      FitResult f = fit_region(c, *view, early);
+        return RegionView(regions, r);
+      }();
+      FitResult f = fit_region(c, view, early);
       std::lock_guard guard(lock);
       if (f.over_budget) {
         const int before = regions.region_count();
@@ -1424,13 +1426,10 @@ CadRegions make_cad_regions(const Spline& spline, const CadRegionOptions& o) {
       if (o.progress && now - last_said >= std::chrono::seconds(2)) {
         last_said = now;
         o.progress("fitting region faces: " + std::to_string(done) + " fitted, " + std::to_string(to_fit) +
-                   " to fit (" + std::to_string(out.budget_splits) + " splits and " + std::to_string(out.islands) +
-                   " islands for the pole budget so far)");
+                   " to fit (" + cuts() + " so far)");
       }
     });
-    if (o.progress)
-      o.progress("fitted " + std::to_string(done) + " region faces (" + std::to_string(out.budget_splits) +
-                 " splits and " + std::to_string(out.islands) + " islands for the pole budget)");
+    if (o.progress) o.progress("fitted " + std::to_string(done) + " region faces (" + cuts() + ")");
     {
       const std::vector<int> order = regions.renumber();
       std::vector<FitResult> sorted(fits.size());
