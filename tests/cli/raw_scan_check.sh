@@ -5,18 +5,13 @@
 # invalid shell with exit 5), and the region-face files read back by FreeCAD
 # (freecad_shape_check.py: valid, one shell, the reported faces, one free loop per boundary loop).
 # Every point the fit counts as fitted evaluates through `tbs eval` (fitted_points_check.py).
-#   raw_scan_check.sh TBS_EXE WORK_DIR DATA_FILE MODE
+#   raw_scan_check.sh TBS_EXE WORK_DIR DATA_FILE
 #     DATA_FILE inside the tarball, e.g. data/meshes/head.off
-#     MODE default: region faces at the default CAD tolerance as STEP and IGES, triangle patches
-#                   (CAD tolerance 1e-3, angle 20), the exact pieces (one face each);
-#          regions: as default, without the exact pieces (on patch-20 and sphere966 they
-#                   finish and pass BRepCheck, but take about 2 minutes and 0.5 GB; head's did
-#                   not finish in 5 minutes: docs/benchmarks.md#cad-export);
-#          relaxed: region faces as STEP and IGES, and triangle patches, at CAD tolerance 1e-3
-#                   and angle tolerance 20 (these fits fold or stretch: the defaults take
-#                   minutes, docs/benchmarks.md#cad-export).
+# Exports: region faces at the default CAD tolerance as STEP and IGES, triangle patches (CAD
+# tolerance 1e-3, angle 20), and the exact pieces (one face each; lion.off's 202,473 take about
+# 2 minutes and 6 GB: docs/benchmarks.md#cad-export).
 set -euo pipefail
-tbs="$1" work="$2" file="$3" mode="$4"
+tbs="$1" work="$2" file="$3"
 here="$(cd "$(dirname "$0")" && pwd)"
 tarball=/usr/share/doc/libcgal-dev/data.tar.gz
 if [ ! -f "$tarball" ]; then
@@ -42,19 +37,13 @@ print("parameterized by %s, angle distortion %.3f, area distortion %.3f; converg
       % (p["method"], p["angle_distortion"]["mean"], p["area_distortion"]["mean"], r["max_error"]))
 PY
 relaxed=(--cad-tolerance 1e-3 --angle-tolerance 20)
-case "$mode" in
-  default|regions) regions=() ;;
-  relaxed) regions=("${relaxed[@]}") ;;
-  *) echo "unknown mode $mode" >&2; exit 2 ;;
-esac
-"$tbs" convert "$out.tbs" "$out.step" "${regions[@]}" --report "$out.step.json" | tee "$out.step.txt"
-"$tbs" convert "$out.tbs" "$out.igs" "${regions[@]}" --quiet
+"$tbs" convert "$out.tbs" "$out.step" --report "$out.step.json" | tee "$out.step.txt"
+"$tbs" convert "$out.tbs" "$out.igs" --quiet
 cad=("$out.step" "$out.igs")
 /usr/bin/python3 "$here/freecad_shape_check.py" "$out.tbs" "$out.step.json" "${cad[@]}"
 "$tbs" convert "$out.tbs" "$out-triangles.step" --faces triangles "${relaxed[@]}" --quiet
 test -s "$out-triangles.step"
-if [ "$mode" = default ]; then
-  "$tbs" convert "$out.tbs" "$out-exact.step" --exact --triangle-patch degenerate --quiet
-  test -s "$out-exact.step"
-fi
+# tbs checks every shape with BRepCheck before writing it and refuses an invalid one (exit 5).
+"$tbs" convert "$out.tbs" "$out-exact.step" --exact --triangle-patch degenerate --quiet
+test -s "$out-exact.step"
 rm -f "$out"*.step "$out"*.igs
