@@ -946,31 +946,76 @@ void border_samples(const Context& c, const std::vector<Regions::HalfEdge>& bord
   }
 }
 
-// Points of the rectangle grid given by (us x vs) that lie in the region, evaluated.
-void grid_samples(const Context& c, const RegionView& rv, const std::vector<double>& us, const std::vector<double>& vs,
-                  bool derivatives, std::vector<Sample>& out) {
-  std::vector<Point2> pts;
-  std::vector<char> compare;
-  pts.reserve(us.size() * vs.size());
-  for (double v : vs)
-    for (double u : us) {
-      const Point2 p(u, v);
-      const int t = c.ev.locate(p);
-      if (rv.holds(t)) {
-        pts.push_back(p);
-        compare.push_back(false);
+// The samples of a rectangle grid (us x vs) at its points in the region, kept from one round
+// of a fit to the next: refinement bisects some spans and keeps the others, and a kept span's
+// grid points come back bit for bit (the same breaks give the same inner points and
+// midpoints), so only the new points are located and evaluated. On lion.off's region faces
+// about half of the grid points of a round were evaluated in an earlier round.
+class GridSamples {
+ public:
+  // Appends the samples of the grid (us x vs, both increasing) in the region to `out`, v
+  // outer, u inner.
+  void update(const Context& c, const RegionView& rv, const std::vector<double>& us, const std::vector<double>& vs,
+              std::vector<Sample>& out) {
+    const std::vector<int> ou = match(us_, us), ov = match(vs_, vs);
+    // Per new grid point: an old sample (>= 0), outside the region (-1) or to evaluate (-2).
+    std::vector<int> at(us.size() * vs.size());
+    std::vector<Point2> pts;
+    for (size_t j = 0; j < vs.size(); ++j)
+      for (size_t i = 0; i < us.size(); ++i) {
+        int& a = at[i + us.size() * j];
+        if (ou[i] >= 0 && ov[j] >= 0) {
+          a = at_[static_cast<size_t>(ou[i]) + us_.size() * static_cast<size_t>(ov[j])];
+          continue;
+        }
+        const Point2 q(us[i], vs[j]);
+        a = rv.holds(c.ev.locate(q)) ? -2 : -1;
+        if (a == -2) pts.push_back(q);
       }
+    std::vector<Point3> pos(pts.size());
+    std::vector<Vector3> du(pts.size()), dv(pts.size());
+    std::vector<uint8_t> inside(pts.size());
+    c.ev.evaluate_batch(pts, pos, du, dv, inside, c.o.threads);
+    std::vector<Sample> samples;
+    size_t next = 0;
+    for (int& a : at) {
+      if (a >= 0) {
+        samples.push_back(samples_[static_cast<size_t>(a)]);
+      } else if (a == -2) {
+        const size_t k = next++;
+        if (!inside[k]) {
+          a = -1;
+          continue;
+        }
+        samples.push_back(make_sample(pts[k], SurfacePoint{pos[k], du[k], dv[k]}, false));
+      } else {
+        continue;
+      }
+      a = static_cast<int>(samples.size()) - 1;
     }
-  std::vector<Point3> pos(pts.size());
-  std::vector<Vector3> du(derivatives ? pts.size() : 0), dv(derivatives ? pts.size() : 0);
-  std::vector<uint8_t> inside(pts.size());
-  c.ev.evaluate_batch(pts, pos, du, dv, inside, c.o.threads);
-  for (size_t i = 0; i < pts.size(); ++i) {
-    if (!inside[i]) continue;
-    SurfacePoint sp{pos[i], derivatives ? du[i] : Vector3::Zero(), derivatives ? dv[i] : Vector3::Zero()};
-    out.push_back(make_sample(pts[i], sp, derivatives && compare[i]));
+    out.insert(out.end(), samples.begin(), samples.end());
+    us_ = us;
+    vs_ = vs;
+    at_ = std::move(at);
+    samples_ = std::move(samples);
   }
-}
+
+ private:
+  // For every value of `now`, its index in `before` (equal bits), or -1.
+  static std::vector<int> match(const std::vector<double>& before, const std::vector<double>& now) {
+    std::vector<int> out(now.size(), -1);
+    size_t k = 0;
+    for (size_t i = 0; i < now.size(); ++i) {
+      while (k < before.size() && before[k] < now[i]) ++k;
+      if (k < before.size() && before[k] == now[i]) out[i] = static_cast<int>(k);
+    }
+    return out;
+  }
+
+  std::vector<double> us_, vs_;
+  std::vector<int> at_;  // per grid point (u inner): index into samples_, or -1 outside the region
+  std::vector<Sample> samples_;
+};
 
 // Every break and the midpoint of every span.
 std::vector<double> breaks_and_midpoints(const std::vector<double>& br) {
@@ -1053,6 +1098,7 @@ FitResult fit_region(const Context& c, const RegionView& rv, bool early) {
     Point2 worst;
   };
   std::vector<Round> rounds;
+  GridSamples fit_grid, check_grid;
   for (int round = 0; round < kMaxRounds; ++round) {
     const long poles = static_cast<long>(bu.size() - 1 + static_cast<size_t>(p)) *
                        static_cast<long>(bv.size() - 1 + static_cast<size_t>(p));
@@ -1071,7 +1117,7 @@ FitResult fit_region(const Context& c, const RegionView& rv, bool early) {
     // Fit samples: 3 x 3 per cell (with derivatives), and the border. 4 x 4 took more poles
     // and faces for the same tolerance (head.off 122 region faces, 99 with 3 x 3).
     std::vector<Sample> fit;
-    grid_samples(c, rv, inner_points(bu, std::min(p, 2)), inner_points(bv, std::min(p, 2)), true, fit);
+    fit_grid.update(c, rv, inner_points(bu, std::min(p, 2)), inner_points(bv, std::min(p, 2)), fit);
     border_samples(c, border, min_span / (p + 1), 0.0, fit);
     // Thin plate per cell: relative to the data a cell holds, 3 x 3 samples.
     const double per_cell = 9;
@@ -1115,7 +1161,7 @@ FitResult fit_region(const Context& c, const RegionView& rv, bool early) {
     // Check samples: breaks and midpoints of the grid, the border between the fit samples,
     // and the triangle lattices.
     std::vector<Sample> check;
-    grid_samples(c, rv, breaks_and_midpoints(bu), breaks_and_midpoints(bv), true, check);
+    check_grid.update(c, rv, breaks_and_midpoints(bu), breaks_and_midpoints(bv), check);
     border_samples(c, border, min_span / (p + 1), 0.5, check);
     check.insert(check.end(), lattice.begin(), lattice.end());
     double pos_dev = 0, normal_dev = 0;
