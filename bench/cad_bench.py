@@ -51,7 +51,7 @@ def run_measured(cmd, timeout):
                 os.wait4(p.pid, 0)
                 return None
             time.sleep(0.05)
-        p.returncode = os.waitstatus_to_exitcode(status)
+        p.returncode = os.waitstatus_to_exitcode(status)  # reaped here: Popen must not wait again
         err.seek(0)
         return p.returncode, err.read().decode(errors="replace"), usage.ru_maxrss * 1024
 
