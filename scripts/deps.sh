@@ -1,7 +1,8 @@
 # Shared by scripts/test.sh and scripts/demo.sh: the Debian packages tbs needs, installed when
 # missing. Source it, then call `tbs_install_deps [extra packages...]`.
-# libopenblas0-serial: CHOLMOD's supernodal factorization (region faces, LSCM) runs on BLAS;
-# without it Debian's reference BLAS takes half of a region-face export.
+# libopenblas0-serial: CHOLMOD's supernodal factorization (the fit's control points, region
+# faces, LSCM) runs on BLAS; without it Debian's reference BLAS takes half of a region-face
+# export. Serial, so that results do not depend on a BLAS thread count.
 
 TBS_PACKAGES=(
   build-essential cmake pkg-config

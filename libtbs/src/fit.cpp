@@ -126,6 +126,12 @@ std::string FitReport::to_json(bool with_times) const {
     nlohmann::ordered_json st = nlohmann::ordered_json::object();
     for (const auto& [k, v] : stage_seconds) st[k] = v;
     j["stage_seconds"] = st;
+    const SolveStages& ss = solve_stages;
+    j["solve_stages"] = {{"solves", ss.solves},         {"pattern", ss.pattern},
+                         {"basis_rows", ss.basis_rows}, {"assembly", ss.assembly},
+                         {"analysis", ss.analysis},     {"factorization", ss.factorization},
+                         {"solve", ss.solve},           {"cg_iterations", ss.cg_iterations},
+                         {"unknowns", ss.unknowns},     {"nonzeros", ss.nonzeros}};
   }
   nlohmann::ordered_json r = nlohmann::ordered_json::array();
   for (const auto& x : rounds)
@@ -350,6 +356,7 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
   std::vector<Point3> positions(N);
   std::vector<double> err(N, 0.0);
   std::vector<Point3> previous_cp;
+  detail::SolveTimes solve_times;
 
   for (int iter = 0;; ++iter) {
     Spline spline = Spline::with_canonical_map(n, fdom.domain(), knots);
@@ -422,7 +429,8 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
       progress("solve", "round " + std::to_string(iter + 1) + ": solving " +
                             std::to_string(spline.control_point_count()) + " control points",
                0);
-      spline.control_points() = detail::solve_control_points(spline, eval, make_points(), lambda, opt.threads);
+      spline.control_points() =
+          detail::solve_control_points(spline, eval, make_points(), lambda, opt.threads, &solve_times);
       stage["solve"] += seconds_since(ts);
     };
     solve();
@@ -625,6 +633,10 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
   rep.seconds = seconds_since(t_start);
   for (const char* s : {"normals", "domain", "solve", "knots", "refine", "error"})
     rep.stage_seconds.emplace_back(s, stage[s]);
+  rep.solve_stages = {solve_times.solves,   solve_times.pattern,       solve_times.basis_rows,
+                      solve_times.assembly, solve_times.analysis,      solve_times.factorization,
+                      solve_times.solve,    solve_times.cg_iterations, solve_times.unknowns,
+                      solve_times.nonzeros};
   return res;
 }
 

@@ -38,12 +38,37 @@ struct FitPoints {
 void group_by_triangle(std::span<const int> triangle, int triangle_count, std::vector<int>& order,
                        std::vector<int>& start);
 
+/// Wall seconds of the parts of solve_control_points, summed over calls (FitReport::SolveStages).
+struct SolveTimes {
+  int solves = 0;
+  double pattern = 0;        ///< support sets, sparsity pattern, control-net pairs
+  double basis_rows = 0;     ///< thread-seconds of the points' basis rows (inside pattern and assembly)
+  double assembly = 0;       ///< local normal equations, their scatter, the sparse matrix
+  double analysis = 0;       ///< CHOLMOD ordering and symbolic factorisation
+  double factorization = 0;  ///< CHOLMOD numeric factorisation
+  double solve = 0;          ///< triangular solves and conjugate gradients
+  int cg_iterations = 0;     ///< conjugate-gradient iterations of the split solves
+  long unknowns = 0;         ///< rows of the last call's factorised matrix (N split, 3N coupled)
+  long nonzeros = 0;         ///< of the last call's factorised matrix (lower triangle)
+};
+
+/// How the control-point system is solved. Split (the default): CHOLMOD's supernodal
+/// factorisation of the N x N matrix that x, y and z share, and conjugate gradients on the
+/// coupling of the fairness term, preconditioned by it. The coupled direct solves factorise
+/// the 3N x 3N system (simplicial: the solver before 2026-12-05); kept for comparison, they
+/// agree with the split solve to rounding. All run BLAS serially: the result does not depend
+/// on the thread count.
+enum class Solver { Split, CoupledSupernodal, CoupledSimplicial };
+
 /// Minimises sum |p - F(u)|^2 + lambda sum w_i ((n.F_u)^2 + (n.F_v)^2)
 ///           + sum_t bend[t] integral_t (|F_uu|^2 + 2 |F_uv|^2 + |F_vv|^2) + regulariser,
 /// with w_i = pts.fair_weight(i), over the control
 /// points of `spline` (knots fixed) and returns them. Deterministic for any thread count.
+/// Adds its times to `times` when given.
 /// \throw SolverError if the factorisation fails.
 std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& eval,
-                                         const FitPoints& pts, double lambda, int threads);
+                                         const FitPoints& pts, double lambda, int threads,
+                                         SolveTimes* times = nullptr,
+                                         Solver solver = Solver::Split);
 
 }  // namespace tbs::detail

@@ -8,6 +8,7 @@
 #include <tbs/scan.h>
 
 #include "cgal_demo_data.h"
+#include "fit_solve.h"
 
 #include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
@@ -770,6 +771,56 @@ TEST(Fit, DeterministicForAnyThreadCount) {
   SplineFile fa{a.spline, "mm", a.report.to_json(false)};
   SplineFile fb{b.spline, "mm", b.report.to_json(false)};
   EXPECT_EQ(format_tbs(fa), format_tbs(fb));
+}
+
+// The three ways of solving the control-point system give the same control points to rounding:
+// the split solve (the default: the scalar matrix factorised, conjugate gradients on the
+// fairness term's coupling) and the coupled system factorised supernodal and simplicial (the
+// solver before). With the fairness term (coordinates coupled) and without, the bending term
+// on. The fit's report counts its solves and the size of the last one.
+TEST(FitSolve, SplitAndCoupledSolvesAgreeToRounding) {
+  const auto z = [](double u, double v) { return 0.1 * std::sin(5 * u) * std::cos(4 * v); };
+  const Scan s = random_scan([&](double u, double v) { return Point3(u, v, z(u, v)); }, 4000, 21);
+  FitOptions o;
+  o.tolerance = 5e-4;
+  const FitResult r = fit(s, o);
+  const int N = r.spline.control_point_count();
+  EXPECT_GE(r.report.solve_stages.solves, r.report.iterations);
+  EXPECT_GE(r.report.solve_stages.cg_iterations, r.report.solve_stages.solves);
+  EXPECT_EQ(r.report.solve_stages.unknowns, N);
+  EXPECT_GT(r.report.solve_stages.nonzeros, N);
+
+  const Evaluator ev(r.spline);
+  std::vector<int> located(r.uv.size()), order, start;
+  std::vector<Vector3> normals(r.uv.size());
+  for (size_t i = 0; i < r.uv.size(); ++i) {
+    located[i] = ev.locate(r.uv[i]);
+    const double u = r.uv[i].x(), v = r.uv[i].y();
+    const double zu = 0.5 * std::cos(5 * u) * std::cos(4 * v), zv = -0.4 * std::sin(5 * u) * std::sin(4 * v);
+    normals[i] = Vector3(-zu, -zv, 1).normalized();
+  }
+  const int T = r.spline.domain().triangle_count();
+  detail::group_by_triangle(located, T, order, start);
+  const std::vector<double> bend(T, 1e-7);
+  const detail::FitPoints pts{s.positions, normals, r.uv, located, order, start, {}, bend};
+  for (const double lambda : {1e-3, 0.0}) {
+    SCOPED_TRACE(lambda);
+    detail::SolveTimes times;
+    const auto a = detail::solve_control_points(r.spline, ev, pts, lambda, 2, &times, detail::Solver::Split);
+    ASSERT_EQ(a.size(), static_cast<size_t>(N));
+    for (const auto solver : {detail::Solver::CoupledSupernodal, detail::Solver::CoupledSimplicial}) {
+      const auto b = detail::solve_control_points(r.spline, ev, pts, lambda, 2, nullptr, solver);
+      ASSERT_EQ(b.size(), a.size());
+      double diff = 0, size = 0;
+      for (int j = 0; j < N; ++j) diff = std::max(diff, (a[j] - b[j]).norm()), size = std::max(size, b[j].norm());
+      EXPECT_LE(diff, 1e-9 * size);
+    }
+    EXPECT_EQ(times.solves, 1);
+    EXPECT_EQ(times.unknowns, N);
+    // Without the coupling the scalar factor solves it exactly, no iterations.
+    if (lambda == 0) EXPECT_EQ(times.cg_iterations, 0);
+    else EXPECT_GE(times.cg_iterations, 1);
+  }
 }
 
 // Real data: CGAL's mesh_with_border.off, parameterized in the test by projection on its

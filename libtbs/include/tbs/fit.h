@@ -124,6 +124,21 @@ struct FitReport {
   double seconds = 0;
   /// Wall time per stage: normals, domain, solve, knots, refine, error.
   std::vector<std::pair<std::string, double>> stage_seconds;
+  /// The control-point solves of the fit (the "solve" stage, the knot search's re-solves
+  /// included), split into their parts: wall seconds summed over the solves.
+  struct SolveStages {
+    int solves = 0;
+    double pattern = 0;        ///< support sets and sparsity pattern
+    double basis_rows = 0;     ///< thread-seconds of the points' basis rows (part of pattern and assembly)
+    double assembly = 0;       ///< normal equations: local systems, scatter, sparse matrix
+    double analysis = 0;       ///< CHOLMOD ordering and symbolic factorisation
+    double factorization = 0;  ///< CHOLMOD numeric factorisation
+    double solve = 0;          ///< triangular solves and conjugate gradients
+    int cg_iterations = 0;     ///< conjugate-gradient iterations on the fairness term's coupling
+    long unknowns = 0;         ///< rows of the last solve's factorised matrix (the control points)
+    long nonzeros = 0;         ///< of that matrix, lower triangle
+  };
+  SolveStages solve_stages;
   /// One entry per refinement round: triangles, control points, max and RMS error (relative).
   struct Round {
     int triangles;
