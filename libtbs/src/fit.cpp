@@ -146,14 +146,15 @@ std::string FitReport::to_json(bool with_times) const {
 namespace {
 
 // The memory model of estimate_fit_memory(): bytes = base + points * p + control points * c
-// b^1.5, b = beta_count(n) (basis functions per triangle; the per-triangle systems, the
+// b^1.75, b = beta_count(n) (basis functions per triangle; the per-triangle systems, the
 // evaluator's graph and the sparse factor grow with it), fitted to the peak resident sets of
-// `tbs fit` on synthetic scans of 100k to 1M points at degrees 2 to 5 with 1,195 to 40,969
-// control points (bench/memory_bench.sh, docs/benchmarks.md "Memory"): within -8 % to +28 %
-// of every row before the safety factor.
-constexpr double kMemoryBase = 30e6;
-constexpr double kMemoryPerPoint = 360;
-constexpr double kMemoryPerControlPoint = 1000;  // times b^1.5
+// `tbs fit` on synthetic scans of 100k to 1M points at degrees 2 to 5 with 1,195 to 101,398
+// control points (bench/memory_bench.sh and bench/solve_profile.sh, docs/benchmarks.md
+// "Memory", 2026-12-05, after the split solve): at or above every row, by at most 37 %,
+// before the safety factor.
+constexpr double kMemoryBase = 40e6;
+constexpr double kMemoryPerPoint = 420;
+constexpr double kMemoryPerControlPoint = 290;  // times b^1.75
 constexpr double kMemorySafety = 1.25;
 
 // Weight of a guide point (Scan::guide) against a measured one, in every term of the fit.
@@ -173,7 +174,7 @@ std::string format_bytes(double bytes) {
 size_t estimate_fit_memory(size_t points, int degree, size_t control_points) {
   const double b = beta_count(std::clamp(degree, 1, tol::kMaxDegree));
   const double bytes = kMemoryBase + static_cast<double>(points) * kMemoryPerPoint +
-                       static_cast<double>(control_points) * kMemoryPerControlPoint * b * std::sqrt(b);
+                       static_cast<double>(control_points) * kMemoryPerControlPoint * std::pow(b, 1.75);
   return static_cast<size_t>(std::min(bytes * kMemorySafety, 1e19));
 }
 
