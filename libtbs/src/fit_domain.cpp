@@ -155,19 +155,53 @@ struct Region {
 
 double signed_area2(const Point2& a, const Point2& b, const Point2& c) { return det3(a, b, c); }
 
-// Edge (as edge_key) -> its one or two triangles (second -1 on the outline).
-std::unordered_map<uint64_t, std::array<int, 2>> edge_face_map(const Region& r) {
-  std::unordered_map<uint64_t, std::array<int, 2>> edge_faces;
-  edge_faces.reserve(r.tris.size() * 2);
+// Triangle neighbours through each point's star (the triangles using it, by index): linear
+// in the region's size, and without the hash tables that made a million-point region slow.
+struct Adjacency {
+  std::vector<int> start, star;  // the star of point v: star[start[v]] .. star[start[v + 1] - 1]
+  // across[f][k]: the first other triangle (by index) with both ends of edge (t[k], t[k + 1]);
+  // -1 on the outline.
+  std::vector<std::array<int, 3>> across;
+  // The first triangle (by index) that runs an edge in the same direction as an earlier one
+  // (the region is then not manifold), with that edge; face -1 if there is none.
+  struct Duplicate {
+    int face = -1, a = -1, b = -1;
+  } duplicate;
+
+  std::span<const int> star_of(int v) const {
+    return {star.data() + start[v], static_cast<size_t>(start[v + 1] - start[v])};
+  }
+};
+
+bool has_point(const std::array<int, 3>& t, int v) { return t[0] == v || t[1] == v || t[2] == v; }
+
+Adjacency adjacency(const Region& r, size_t n_points) {
+  Adjacency a;
+  a.start.assign(n_points + 1, 0);
+  for (const auto& t : r.tris)
+    for (int v : t) ++a.start[v + 1];
+  for (size_t v = 0; v < n_points; ++v) a.start[v + 1] += a.start[v];
+  a.star.resize(static_cast<size_t>(a.start[n_points]));
+  std::vector<int> fill(a.start.begin(), a.start.end() - 1);
+  for (size_t f = 0; f < r.tris.size(); ++f)
+    for (int v : r.tris[f]) a.star[fill[v]++] = static_cast<int>(f);
+  a.across.resize(r.tris.size());
   for (size_t f = 0; f < r.tris.size(); ++f)
     for (int k = 0; k < 3; ++k) {
-      auto [it, fresh] = edge_faces.try_emplace(edge_key(r.tris[f][k], r.tris[f][(k + 1) % 3]),
-                                                std::array<int, 2>{static_cast<int>(f), -1});
-      if (!fresh) it->second[1] = static_cast<int>(f);
+      const int from = r.tris[f][k], to = r.tris[f][(k + 1) % 3];
+      int g = -1;
+      for (int q : a.star_of(from)) {
+        if (q == static_cast<int>(f)) continue;
+        const auto& t = r.tris[q];
+        const int at = t[0] == from ? 0 : t[1] == from ? 1 : 2;
+        if (t[(at + 1) % 3] == to && q < static_cast<int>(f) && a.duplicate.face < 0)
+          a.duplicate = {static_cast<int>(f), from, to};
+        if (g < 0 && (t[(at + 1) % 3] == to || t[(at + 2) % 3] == to)) g = q;
+      }
+      a.across[f][k] = g;
     }
-  return edge_faces;
+  return a;
 }
-
 
 Region region_from_faces(std::span<const Point2> uv, std::span<const std::array<int, 3>> faces) {
   size_t pos = 0, neg = 0, zero = 0, first_neg = 0, first_pos = 0;
@@ -207,27 +241,20 @@ Region region_from_faces(std::span<const Point2> uv, std::span<const std::array<
   return r;
 }
 
-// The directed boundary edges of a region, as next[a] = b; throws on non-manifold input.
-std::vector<std::vector<int>> boundary_loops(const Region& r, size_t n_points) {
-  std::unordered_map<uint64_t, int> directed;  // (a,b) -> count
-  directed.reserve(r.tris.size() * 3);
-  auto dkey = [](int a, int b) {
-    return (static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b);
-  };
-  for (size_t f = 0; f < r.tris.size(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      const int a = r.tris[f][k], b = r.tris[f][(k + 1) % 3];
-      if (++directed[dkey(a, b)] > 1)
-        throw InvalidInput("the mesh is not manifold: edge (" + std::to_string(a) + ", " +
-                           std::to_string(b) + ") is used twice in the same direction (face " +
-                           std::to_string(f) + "); repair the mesh or orient its faces consistently");
-    }
+// The boundary loops of a region (adj: its adjacency), as point indices; throws on
+// non-manifold input.
+std::vector<std::vector<int>> boundary_loops(const Region& r, const Adjacency& adj, size_t n_points) {
+  if (const auto& d = adj.duplicate; d.face >= 0)
+    throw InvalidInput("the mesh is not manifold: edge (" + std::to_string(d.a) + ", " + std::to_string(d.b) +
+                       ") is used twice in the same direction (face " + std::to_string(d.face) +
+                       "); repair the mesh or orient its faces consistently");
+  // Every directed edge is used once, so a triangle across an edge runs it the other way.
   std::vector<int> next(n_points, -1);
   std::vector<int> out_count(n_points, 0);
-  for (const auto& t : r.tris)
+  for (size_t f = 0; f < r.tris.size(); ++f)
     for (int k = 0; k < 3; ++k) {
-      const int a = t[k], b = t[(k + 1) % 3];
-      if (directed.count(dkey(b, a))) continue;
+      if (adj.across[f][k] >= 0) continue;
+      const int a = r.tris[f][k], b = r.tris[f][(k + 1) % 3];
       if (++out_count[a] > 1)
         throw InvalidInput("the mesh is not manifold at point " + std::to_string(a) +
                            ": two boundary loops touch there; repair the mesh (split the vertex)");
@@ -252,7 +279,7 @@ std::vector<std::vector<int>> boundary_loops(const Region& r, size_t n_points) {
 
 // Keeps the largest edge-connected component of a region; returns the dropped triangle count.
 size_t keep_largest_component(Region& r, std::span<const Point2> uv) {
-  auto edge_faces = edge_face_map(r);
+  const Adjacency adj = adjacency(r, uv.size());
   std::vector<int> comp(r.tris.size(), -1);
   std::vector<double> area;
   for (size_t s = 0; s < r.tris.size(); ++s) {
@@ -266,11 +293,11 @@ size_t keep_largest_component(Region& r, std::span<const Point2> uv) {
       stack.pop_back();
       const auto& t = r.tris[f];
       area[c] += signed_area2(uv[t[0]], uv[t[1]], uv[t[2]]);
-      for (int k = 0; k < 3; ++k) {
-        const auto& ef = edge_faces[edge_key(t[k], t[(k + 1) % 3])];
-        const int g = ef[0] == f ? ef[1] : ef[0];
-        if (g >= 0 && comp[g] < 0) comp[g] = c, stack.push_back(g);
-      }
+      // Every triangle sharing an edge, also where more than two do (a face given twice is
+      // kept with its copy, and boundary_loops then names it).
+      for (int k = 0; k < 3; ++k)
+        for (int g : adj.star_of(t[k]))
+          if (comp[g] < 0 && has_point(r.tris[g], t[(k + 1) % 3])) comp[g] = c, stack.push_back(g);
     }
   }
   if (area.size() <= 1) return 0;
@@ -416,9 +443,8 @@ Region region_from_points(std::span<const Point2> uv) {
 
 // Sharp edges of the region (dihedral angle of the 3D triangles above the threshold), chained
 // into polylines of point indices.
-std::vector<std::vector<int>> feature_chains(const Region& r, std::span<const Point3> pos,
+std::vector<std::vector<int>> feature_chains(const Region& r, const Adjacency& adj, std::span<const Point3> pos,
                                              double angle_deg) {
-  auto edge_faces = edge_face_map(r);
   std::vector<Vector3> fn(r.tris.size());
   for (size_t f = 0; f < r.tris.size(); ++f) {
     const auto& t = r.tris[f];
@@ -428,12 +454,15 @@ std::vector<std::vector<int>> feature_chains(const Region& r, std::span<const Po
   const double cos_limit = std::cos(angle_deg * std::numbers::pi / 180);
   std::map<int, std::vector<int>> nbr;  // ordered: deterministic chaining
   std::vector<std::pair<int, int>> sharp;
-  for (const auto& [key, ef] : edge_faces) {
-    if (ef[1] < 0) continue;
-    if (fn[ef[0]].isZero() || fn[ef[1]].isZero()) continue;
-    if (fn[ef[0]].dot(fn[ef[1]]) >= cos_limit) continue;
-    sharp.emplace_back(static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu));
-  }
+  for (size_t f = 0; f < r.tris.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int g = adj.across[f][k];
+      if (g < static_cast<int>(f)) continue;  // the outline, or seen from g
+      if (fn[f].isZero() || fn[g].isZero()) continue;
+      if (fn[f].dot(fn[g]) >= cos_limit) continue;
+      const int a = r.tris[f][k], b = r.tris[f][(k + 1) % 3];
+      sharp.emplace_back(std::min(a, b), std::max(a, b));
+    }
   std::sort(sharp.begin(), sharp.end());
   for (auto [a, b] : sharp) nbr[a].push_back(b), nbr[b].push_back(a);
   for (auto& [v, list] : nbr) std::sort(list.begin(), list.end());
@@ -466,10 +495,9 @@ std::vector<std::vector<int>> feature_chains(const Region& r, std::span<const Po
 // band of edges bent by more than a third of the feature angle, long and thin, whose two sides
 // have normals more than the feature angle apart, is a crease; its centre line (centroids of
 // the band's triangles, averaged in bins along the band's main axis) goes into the domain.
-std::vector<std::vector<Point2>> band_creases(const Region& r, std::span<const Point2> uv,
+std::vector<std::vector<Point2>> band_creases(const Region& r, const Adjacency& adj, std::span<const Point2> uv,
                                               std::span<const Point3> pos, double angle_deg,
                                               double h, const std::unordered_set<uint64_t>& taken) {
-  auto edge_faces = edge_face_map(r);
   const size_t F = r.tris.size();
   std::vector<Vector3> fn(F);
   std::vector<Point2> centroid(F);
@@ -482,50 +510,53 @@ std::vector<std::vector<Point2>> band_creases(const Region& r, std::span<const P
   const double cos_band = std::cos(angle_deg / 3 * std::numbers::pi / 180);
   const double cos_crease = std::cos(angle_deg * std::numbers::pi / 180);
   // Triangles at the region's outline are stretched and tilted (alpha shape): not crease clues.
-  std::unordered_set<int> rim;
-  for (const auto& [key, ef] : edge_faces)
-    if (ef[1] < 0) rim.insert(static_cast<int>(key >> 32)), rim.insert(static_cast<int>(key & 0xffffffffu));
+  std::vector<char> rim(uv.size(), 0);
+  for (size_t f = 0; f < F; ++f)
+    for (int k = 0; k < 3; ++k)
+      if (adj.across[f][k] < 0) rim[r.tris[f][k]] = rim[r.tris[f][(k + 1) % 3]] = 1;
   auto at_rim = [&](int f) {
     for (int v : r.tris[f])
-      if (rim.count(v)) return true;
+      if (rim[v]) return true;
     return false;
   };
   std::vector<char> band(F, 0);
-  std::vector<std::pair<uint64_t, std::array<int, 2>>> band_edges;
-  for (const auto& [key, ef] : edge_faces) {
-    if (ef[1] < 0 || taken.count(key) || fn[ef[0]].isZero() || fn[ef[1]].isZero()) continue;
-    if (at_rim(ef[0]) || at_rim(ef[1])) continue;
-    if (fn[ef[0]].dot(fn[ef[1]]) >= cos_band) continue;
-    band[ef[0]] = band[ef[1]] = 1;
-    band_edges.push_back({key, ef});
-  }
-  // Components of band triangles (through any shared edge), in a fixed order.
-  std::vector<int> comp(F, -1);
-  std::vector<std::vector<int>> comps;
-  // Band triangles sharing a vertex are neighbours (a crease passing near a vertex leaves
-  // gaps between edge-adjacent ones).
-  std::vector<std::vector<int>> fadj(F);
-  {
-    std::unordered_map<int, std::vector<int>> at_vertex;
-    for (size_t f = 0; f < F; ++f)
-      if (band[f])
-        for (int v : r.tris[f]) at_vertex[v].push_back(static_cast<int>(f));
-    for (const auto& [v, fs] : at_vertex)
-      for (size_t a = 0; a + 1 < fs.size(); ++a) fadj[fs[a]].push_back(fs[a + 1]), fadj[fs[a + 1]].push_back(fs[a]);
-  }
-  for (size_t f = 0; f < F; ++f) {
-    if (!band[f] || comp[f] >= 0) continue;
-    comps.emplace_back();
-    std::vector<int> stack{static_cast<int>(f)};
-    comp[f] = static_cast<int>(comps.size()) - 1;
-    while (!stack.empty()) {
-      const int g = stack.back();
-      stack.pop_back();
-      comps.back().push_back(g);
-      for (int q : fadj[g])
-        if (comp[q] < 0) comp[q] = comp[f], stack.push_back(q);
+  for (size_t f = 0; f < F; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int g = adj.across[f][k];
+      if (g < static_cast<int>(f)) continue;  // the outline, or seen from g
+      if (taken.count(edge_key(r.tris[f][k], r.tris[f][(k + 1) % 3])) || fn[f].isZero() || fn[g].isZero()) continue;
+      if (at_rim(static_cast<int>(f)) || at_rim(g)) continue;
+      if (fn[f].dot(fn[g]) >= cos_band) continue;
+      band[f] = band[g] = 1;
     }
-    std::sort(comps.back().begin(), comps.back().end());
+  // Components of band triangles, each listed by index, ordered by their first triangle.
+  // Band triangles sharing a vertex are neighbours (a crease passing near a vertex leaves
+  // gaps between edge-adjacent ones). Union-find: at a million noisy points most triangles
+  // are band triangles.
+  std::vector<int> parent(F);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto root = [&](int f) {
+    while (parent[f] != f) f = parent[f] = parent[parent[f]];
+    return f;
+  };
+  for (size_t v = 0; v < uv.size(); ++v) {
+    int last = -1;
+    for (int f : adj.star_of(static_cast<int>(v))) {
+      if (!band[f]) continue;
+      if (last >= 0) {
+        const int a = root(last), b = root(f);
+        if (a != b) parent[std::max(a, b)] = std::min(a, b);
+      }
+      last = f;
+    }
+  }
+  std::vector<int> comp_of(F, -1);
+  std::vector<std::vector<int>> comps;
+  for (size_t f = 0; f < F; ++f) {
+    if (!band[f]) continue;
+    int& c = comp_of[root(static_cast<int>(f))];
+    if (c < 0) c = static_cast<int>(comps.size()), comps.emplace_back();
+    comps[c].push_back(static_cast<int>(f));
   }
   std::vector<std::vector<Point2>> lines;
   for (const auto& c : comps) {
@@ -550,8 +581,7 @@ std::vector<std::vector<Point2>> band_creases(const Region& r, std::span<const P
     size_t cl = 0, cr = 0;
     for (int f : c)
       for (int k = 0; k < 3; ++k) {
-        const auto& ef = edge_faces[edge_key(r.tris[f][k], r.tris[f][(k + 1) % 3])];
-        const int g = ef[0] == f ? ef[1] : ef[0];
+        const int g = adj.across[f][k];
         if (g < 0 || band[g]) continue;
         if ((centroid[g] - mean).dot(side) < 0)
           nl += fn[g], ++cl;
@@ -770,11 +800,12 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
   const double h = std::sqrt(4 * area / (std::sqrt(3.0) * target));
   m.stats.target_edge = h;
 
-  auto loops = boundary_loops(region, n);
+  const Adjacency adj = adjacency(region, n);
+  auto loops = boundary_loops(region, adj, n);
   std::vector<std::vector<int>> chains;
   // Sharp edges only mean something on a given mesh; the Delaunay triangles of bare points
   // straddle creases (found as bands below) and are stretched at the outline.
-  if (in.features && !in.faces.empty()) chains = feature_chains(region, in.positions, in.feature_angle_deg);
+  if (in.features && !in.faces.empty()) chains = feature_chains(region, adj, in.positions, in.feature_angle_deg);
   // Short chains are noise, not features.
   std::erase_if(chains, [&](const std::vector<int>& c) {
     double len = 0;
@@ -788,7 +819,7 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
     std::unordered_set<uint64_t> taken;
     for (const auto& c : chains)
       for (size_t i = 0; i + 1 < c.size(); ++i) taken.insert(edge_key(c[i], c[i + 1]));
-    bands = band_creases(region, in.uv, in.positions, in.feature_angle_deg, h, taken);
+    bands = band_creases(region, adj, in.uv, in.positions, in.feature_angle_deg, h, taken);
   }
 
   // Simplify, offset and mesh; retry with a tighter tolerance while a point is left outside.

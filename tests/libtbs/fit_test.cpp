@@ -204,6 +204,38 @@ TEST(Fit, FoldedParametersAreRefused) {
   }
 }
 
+// Meshes that are not manifold are refused with the edge or the point (the region's adjacency
+// is built from each point's star, not from an edge table: the same checks must still hold).
+TEST(Fit, NonManifoldMeshesAreRefused) {
+  auto message = [](const Scan& bad) {
+    try {
+      fit(bad, {});
+    } catch (const InvalidInput& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  const Scan grid = grid_scan([](double u, double v) { return Point3(u, v, 0.1 * u * v); }, 10, 10, 0, 1);
+  Scan twice = grid;
+  twice.triangles.push_back(grid.triangles[30]);  // a face used twice: its edges run the same way twice
+  const std::string m1 = message(twice);
+  EXPECT_NE(m1.find("not manifold: edge (" + std::to_string(grid.triangles[30][0]) + ", " +
+                    std::to_string(grid.triangles[30][1]) + ") is used twice in the same direction (face " +
+                    std::to_string(grid.triangles.size()) + ")"),
+            std::string::npos)
+      << m1;
+  // Cells (3, 3) and (4, 4) left out: their holes touch at point (4, 4) = 44.
+  Scan pinched = grid;
+  for (int cell : {4 * 9 + 4, 3 * 9 + 3})
+    pinched.triangles.erase(pinched.triangles.begin() + 2 * cell, pinched.triangles.begin() + 2 * cell + 2);
+  const std::string m2 = message(pinched);
+  EXPECT_NE(m2.find("not manifold at point 44: two boundary loops touch there"), std::string::npos) << m2;
+  // The same grid with one cell left out is a disk with a hole, and fits.
+  Scan holed = grid;
+  holed.triangles.erase(holed.triangles.begin() + 2 * (3 * 9 + 3), holed.triangles.begin() + 2 * (3 * 9 + 3) + 2);
+  EXPECT_EQ(message(holed), "(accepted)");
+}
+
 // A cubic polynomial surface is in the spline space of any degree-3 DMS spline: the fit must
 // reproduce it (least squares with exact normals has it as its minimiser).
 TEST(Fit, ReproducesCubicPolynomial) {
