@@ -34,6 +34,7 @@ using Clock = std::chrono::steady_clock;
 // Below this many points there are too few neighbours to estimate normals: the fairness term
 // is left out.
 constexpr size_t kMinPointsForNormals = 20;
+constexpr int kNormalNeighbours = 18;  // estimate_normals' k
 
 double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
@@ -307,12 +308,17 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
     } else if (opt.fairness > 0 && N >= kMinPointsForNormals) {
       progress("normals", "estimating normals of " + std::to_string(N) + " points", 0);
       try {
+        const auto report = [&](double f) {
+          char text[96];
+          std::snprintf(text, sizeof text, "estimating normals: %.0f %% of %zu points", 100 * f, N);
+          progress("normals", text, f);
+        };
         // Inside an arena of opt.threads: the estimate is a plain TBB loop.
         if (opt.threads > 0)
           tbb::task_arena(opt.threads).execute(
-              [&] { normals = estimate_normals(scan.positions, scan.uv, scan.triangles); });
+              [&] { normals = estimate_normals(scan.positions, scan.uv, scan.triangles, kNormalNeighbours, report); });
         else
-          normals = estimate_normals(scan.positions, scan.uv, scan.triangles);
+          normals = estimate_normals(scan.positions, scan.uv, scan.triangles, kNormalNeighbours, report);
       } catch (const InvalidInput& e) {
         throw InvalidInput(name + ": cannot estimate normals (" + e.what() +
                            "); give normals in the input, or turn the fairness term off (--fairness 0)");

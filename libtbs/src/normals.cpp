@@ -17,10 +17,13 @@
 
 #include <Eigen/Eigenvalues>
 #include <boost/iterator/counting_iterator.hpp>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <string>
+#include <thread>
 #include <unordered_map>
 
 namespace tbs {
@@ -81,7 +84,8 @@ Vector3 pca_up(std::span<const Point3> pts) {
 }  // namespace
 
 std::vector<Vector3> estimate_normals(std::span<const Point3> positions, std::span<const Point2> uv,
-                                      std::span<const std::array<int, 3>> triangles, int k) {
+                                      std::span<const std::array<int, 3>> triangles, int k,
+                                      const std::function<void(double)>& progress) {
   const std::size_t n = positions.size();
   if (k < kMinNeighbours)
     throw InvalidInput("estimate_normals: k = " + std::to_string(k) +
@@ -169,7 +173,19 @@ std::vector<Vector3> estimate_normals(std::span<const Point3> positions, std::sp
   // result for any number of threads.
   std::vector<Vector3> normals(n);
   std::vector<char> degenerate(unique.size(), 0);
+  // Progress: blocks done, reported by the calling thread (which works in the loop too).
+  using Clock = std::chrono::steady_clock;
+  const std::thread::id caller = std::this_thread::get_id();
+  std::atomic<std::size_t> done{0};
+  Clock::time_point last_report = Clock::now();
   const auto estimate = [&](const tbb::blocked_range<std::size_t>& range) {
+    if (progress) {
+      const std::size_t now_done = done.fetch_add(range.size()) + range.size();
+      if (std::this_thread::get_id() == caller && Clock::now() - last_report > std::chrono::seconds(2)) {
+        last_report = Clock::now();
+        progress(static_cast<double>(now_done) / static_cast<double>(unique.size()));
+      }
+    }
     std::vector<CPoint> pts;
     std::vector<std::uint32_t> ids;
     JetFit fit;

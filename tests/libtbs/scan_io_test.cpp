@@ -209,6 +209,57 @@ TEST(ScanIo, PlyBinaryBigEndianWithTextureUvAndExtraElements) {
   EXPECT_EQ(s.triangles, (std::vector<Tri>{{0, 1, 2}, {0, 2, 3}}));
 }
 
+// A large binary file (2M points, 66 MB: the reader takes it item by item into the Scan's
+// arrays, sized once from the header) gives back every value it was written with: mixed
+// types, an extra property between the coordinates and the parameters, and faces after them.
+TEST(ScanIo, PlyBinaryTwoMillionPointsComeBackExactly) {
+  constexpr std::uint32_t kPoints = 2'000'000, kFaces = 1000;
+  std::string header =
+      "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(kPoints) +
+      "\nproperty double x\nproperty float y\nproperty float z\nproperty uchar intensity\n"
+      "property double u\nproperty float v\nproperty float nx\nproperty float ny\nproperty float nz\n"
+      "element face " + std::to_string(kFaces) + "\nproperty list uchar int vertex_indices\nend_header\n";
+  // Values from a fixed sequence; floats are exact in double, doubles are written as is.
+  std::mt19937_64 rng(20);
+  std::uniform_real_distribution<double> uni(-1000.0, 1000.0);
+  std::vector<double> x(kPoints), u(kPoints);
+  std::vector<float> y(kPoints), z(kPoints), v(kPoints);
+  Bytes b;
+  b.data.reserve(header.size() + kPoints * 41u + kFaces * 13u);
+  b.text(header);
+  for (std::uint32_t i = 0; i < kPoints; ++i) {
+    x[i] = uni(rng), u[i] = uni(rng) * 1e-3;
+    y[i] = static_cast<float>(uni(rng)), z[i] = static_cast<float>(uni(rng)), v[i] = static_cast<float>(uni(rng));
+    b.put(x[i]).put(y[i]).put(z[i]).put<std::uint8_t>(static_cast<std::uint8_t>(i)).put(u[i]).put(v[i]);
+    b.put(0.0f).put(0.6f).put(0.8f);
+  }
+  for (std::uint32_t f = 0; f < kFaces; ++f)
+    b.put<std::uint8_t>(3)
+        .put(static_cast<std::int32_t>(3 * f))
+        .put(static_cast<std::int32_t>(3 * f + 1))
+        .put(static_cast<std::int32_t>(kPoints - 1 - f));
+  const std::string path = write("two_million.ply", b.data);
+  b.data = std::string();
+  const Scan s = read_scan(path);
+  fs::remove(path);
+  ASSERT_EQ(s.positions.size(), kPoints);
+  ASSERT_EQ(s.uv.size(), kPoints);
+  ASSERT_EQ(s.normals.size(), kPoints);
+  ASSERT_EQ(s.triangles.size(), kFaces);
+  std::size_t wrong = 0, first = kPoints;
+  for (std::uint32_t i = 0; i < kPoints; ++i) {
+    const bool ok = s.positions[i] == Point3(x[i], y[i], z[i]) && s.uv[i] == Point2(u[i], v[i]) &&
+                    std::fabs(s.normals[i].y() - 0.6) < 1e-7 && std::fabs(s.normals[i].z() - 0.8) < 1e-7;
+    if (!ok && wrong++ == 0) first = i;
+  }
+  EXPECT_EQ(wrong, 0u) << "first at point " << first;
+  const int last = static_cast<int>(3 * (kFaces - 1));
+  EXPECT_EQ(s.triangles.back(), (Tri{last, last + 1, static_cast<int>(kPoints - kFaces)}));
+  // The arrays are sized from the header: no growth left over.
+  EXPECT_EQ(s.positions.capacity(), kPoints);
+  EXPECT_EQ(s.uv.capacity(), kPoints);
+}
+
 TEST(ScanErrors, PlyContentErrorsNameTheElement) {
   const std::string head =
       "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty "
@@ -793,6 +844,12 @@ TEST(NormalEstimation, SameResultForAnyThreadCount) {
   tbb::task_arena(2).execute([&] { many = estimate_normals(s.positions, s.xy, {}, 24); });
   ASSERT_EQ(one.size(), many.size());
   for (std::size_t i = 0; i < one.size(); ++i) ASSERT_EQ(one[i], many[i]) << i;
+  // A progress callback (called every 2 s: not at all on this small sample) changes nothing.
+  std::vector<double> fractions;
+  const std::vector<Vector3> reported =
+      estimate_normals(s.positions, s.xy, {}, 24, [&](double f) { fractions.push_back(f); });
+  EXPECT_EQ(reported, one);
+  for (double f : fractions) EXPECT_TRUE(f > 0 && f <= 1) << f;
 }
 
 TEST(NormalEstimation, ReadThenEstimate) {

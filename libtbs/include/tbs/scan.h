@@ -8,6 +8,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <string>
 #include <vector>
@@ -93,11 +94,16 @@ Scan read_scan(const std::string& path, const ScanReadOptions& options = {});
 ///   variance of all positions, signed so that its largest component is positive (for a scan
 ///   lying roughly in a horizontal plane that is +Z).
 ///
+/// `progress`, when given, is called from the calling thread about every 2 seconds with the
+/// fraction of the points done (a million points take about 10 s on one core); whatever it
+/// throws (a cancellation, say) stops the estimate and passes through.
+///
 /// \pre positions finite; uv empty or one per position; triangle indices in [0, #positions).
 /// \throw InvalidInput if a precondition fails, k < 6 (a degree-2 jet has 6 coefficients),
 ///   there are fewer than 6 distinct positions, or the neighbourhood of a point is degenerate (e.g.
 ///   all its neighbours coincide or are collinear).
 std::vector<Vector3> estimate_normals(std::span<const Point3> positions, std::span<const Point2> uv,
-                                      std::span<const std::array<int, 3>> triangles, int k = 18);
+                                      std::span<const std::array<int, 3>> triangles, int k = 18,
+                                      const std::function<void(double)>& progress = {});
 
 }  // namespace tbs
