@@ -72,13 +72,16 @@ struct FitOptions {
   std::string max_memory_name = "FitOptions::max_memory";
   /// Worker threads; 0 = all cores. The result does not depend on it.
   int threads = 0;
-  /// Called from the calling thread between steps. May be empty.
+  /// Called from the calling thread between steps, and every 2 s while normals are estimated.
+  /// May be empty.
   std::function<void(const FitProgress&)> progress;
   /// Cooperative cancellation: when a stop is requested on the std::stop_source this token
   /// comes from (from any thread), fit() throws Cancelled at its next step: before every
   /// progress report, so between the stages (normals, domain, each solve, each knot sweep,
-  /// each error measurement, each refinement round). A stage is not interrupted inside: the
-  /// wait is at most one stage, which on 1M points can be 40 s (docs/benchmarks.md).
+  /// each error measurement, each refinement round) and every 2 s inside the normal
+  /// estimation. Other stages are not interrupted inside: the wait is at most one stage,
+  /// which on 1M points can be 10 s and on 10M points 95 s (the domain build;
+  /// docs/benchmarks.md).
   /// Default: a token that never stops.
   std::stop_token stop;
 };
