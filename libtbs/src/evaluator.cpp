@@ -487,6 +487,8 @@ namespace {
 constexpr size_t kReorderMin = 1024;
 // Points sorted together: 20 bytes of order and copy each, 20 MB at most.
 constexpr size_t kReorderBlock = size_t{1} << 20;
+// Reorder only when there are at most this many grid cells per point.
+constexpr size_t kCellsPerPoint = 64;
 }  // namespace
 
 size_t Evaluator::evaluate_batch(std::span<const Point2> u, std::span<Point3> position,
@@ -514,7 +516,9 @@ size_t Evaluator::evaluate_batch(std::span<const Point2> u, std::span<Point3> po
   // time went to fetching nodes. Each result depends on its point alone, so the order
   // changes no value.
   const detail::BoxGrid& grid = impl_->support_grid;
-  const bool reorder = count >= kReorderMin;
+  // Sorting costs a pass over the grid's cells per block: skip it for a few points on a
+  // large domain, where it would not pay.
+  const bool reorder = count >= kReorderMin && grid.tile_key_count() / kCellsPerPoint <= count;
   std::vector<uint32_t> start, order;
   std::vector<Point2> sorted;
   const double nan = std::numeric_limits<double>::quiet_NaN();

@@ -89,7 +89,8 @@ class Evaluator {
   /// Evaluates many points in parallel (TBB). Output spans may be empty to skip them;
   /// non-empty ones must have u.size() entries. Points outside the domain get NaN and
   /// inside[i] = 0. Results do not depend on the number of threads, nor on the order of the
-  /// points: from 1,024 points on, the batch visits them grouped by cell of the spatial index
+  /// points: from 1,024 points on (and one point per 64 cells of the spatial index), the batch
+  /// visits them grouped by cell of that index
   /// (sorted 2^20 at a time, 20 bytes a point of scratch memory, at most 20 MB), which makes
   /// random-order input about 1.7x faster and changes no value.
   /// \param threads maximum worker threads, 0 for all cores.
