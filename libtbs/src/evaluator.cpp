@@ -258,7 +258,8 @@ struct Evaluator::Impl {
     const double dd = det3(w[0], w[1], w[2]);
     std::array<double, 3> gx, gy;
     affine_gradients(w, gx, gy);
-    nd.geo = {w[0].x(), w[0].y(), gx[0] / dd, gx[1] / dd, gx[2] / dd, gy[0] / dd, gy[1] / dd, gy[2] / dd};
+    nd.geo = {w[0].x(), w[0].y(), gx[0] / dd, gx[1] / dd,
+              gx[2] / dd, gy[0] / dd, gy[1] / dd, gy[2] / dd};
     return true;
   }
 
