@@ -3,13 +3,17 @@
 // orientation from the parameters, the faces or the scan's PCA frame (see tbs/scan.h).
 //
 // We run the per-point loop ourselves rather than calling CGAL::jet_estimate_normals so that
-// the orientation sees exactly the neighbours the fit saw, with one search per point.
+// the orientation sees exactly the neighbours the fit saw, with one search per point. The loop
+// visits the points in Hilbert order, so that consecutive searches walk the same part of the
+// tree and of the point array; each point's normal does not depend on that order.
 #include <CGAL/Eigen_svd.h>
 #include <CGAL/Monge_via_jet_fitting.h>
 #include <CGAL/Orthogonal_k_neighbor_search.h>
 #include <CGAL/Search_traits_3.h>
 #include <CGAL/Search_traits_adapter.h>
 #include <CGAL/Simple_cartesian.h>
+#include <CGAL/Spatial_sort_traits_adapter_3.h>
+#include <CGAL/hilbert_sort.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbs/errors.h>
@@ -169,8 +173,17 @@ std::vector<Vector3> estimate_normals(std::span<const Point3> positions, std::sp
       copies[next[unique_of[i]]++] = static_cast<std::uint32_t>(i);
   }
 
-  // A point's normal depends only on its own neighbourhood, so the parallel loop gives the same
-  // result for any number of threads.
+  // The order of the queries: along a Hilbert curve through the points. Scans often come in
+  // random order (merged views, resampled clouds), and searches from random places miss the
+  // cache at every tree node and point.
+  std::vector<std::uint32_t> order(unique.size());
+  for (std::size_t u = 0; u < unique.size(); ++u) order[u] = static_cast<std::uint32_t>(u);
+  CGAL::hilbert_sort(order.begin(), order.end(),
+                     CGAL::Spatial_sort_traits_adapter_3<Kernel, IndexPointMap>(point_map),
+                     CGAL::Hilbert_sort_middle_policy());
+
+  // A point's normal depends only on its own neighbourhood, so neither the order of the points
+  // nor the parallel loop changes it: the result is the same for any number of threads.
   std::vector<Vector3> normals(n);
   std::vector<char> degenerate(unique.size(), 0);
   // Progress: blocks done, reported by the calling thread (which works in the loop too).
@@ -189,7 +202,8 @@ std::vector<Vector3> estimate_normals(std::span<const Point3> positions, std::sp
     std::vector<CPoint> pts;
     std::vector<std::uint32_t> ids;
     JetFit fit;
-    for (std::size_t u = range.begin(); u != range.end(); ++u) {
+    for (std::size_t j = range.begin(); j != range.end(); ++j) {
+      const std::uint32_t u = order[j];
       const Search search(tree, unique[u], k_used, 0.0, true, distance);
       pts.clear();
       ids.clear();

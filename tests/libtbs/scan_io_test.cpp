@@ -1,3 +1,5 @@
+#include <CGAL/Simple_cartesian.h>
+#include <CGAL/jet_estimate_normals.h>
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 #include <tbs/errors.h>
@@ -868,6 +870,39 @@ TEST(NormalEstimation, ReadThenEstimate) {
   const Scan scan = read_scan(write("surface.ply", text));
   EXPECT_EQ(scan.positions, s.positions);
   expect_normals(s, estimate_normals(scan.positions, scan.uv, scan.triangles), +1);
+}
+
+TEST(NormalEstimation, MatchCgalJetEstimateNormalsToRounding) {
+  // Points in random order and at random places (no ties between neighbour distances), so
+  // that both searches find the same k neighbours, whatever order they visit the points in.
+  // For k = 18 (what fits use), 24 and 40 the normals must be CGAL::jet_estimate_normals'
+  // up to rounding and orientation.
+  using K = CGAL::Simple_cartesian<double>;
+  std::mt19937 rng(19);
+  std::uniform_real_distribution<double> coord(-1, 1);
+  std::vector<Point3> positions;
+  std::vector<std::pair<K::Point_3, K::Vector_3>> cgal;
+  for (int i = 0; i < 3000; ++i) {
+    const double x = coord(rng), y = coord(rng);
+    positions.emplace_back(x, y, height(x, y));
+    cgal.emplace_back(K::Point_3(x, y, height(x, y)), K::Vector_3(0, 0, 0));
+  }
+  for (const int k : {18, 24, 40}) {
+    const std::vector<Vector3> ours = estimate_normals(positions, {}, {}, k);
+    auto reference = cgal;
+    CGAL::jet_estimate_normals<CGAL::Sequential_tag>(
+        reference, static_cast<unsigned>(k - 1),  // CGAL's k leaves out the point itself
+        CGAL::parameters::point_map(CGAL::First_of_pair_property_map<std::pair<K::Point_3, K::Vector_3>>())
+            .normal_map(CGAL::Second_of_pair_property_map<std::pair<K::Point_3, K::Vector_3>>())
+            .degree_fitting(2));
+    double worst = 0;
+    for (std::size_t i = 0; i < positions.size(); ++i) {
+      const K::Vector_3& r = reference[i].second;
+      const Vector3 ref = Vector3(r.x(), r.y(), r.z()).normalized();
+      worst = std::max(worst, std::min((ours[i] - ref).norm(), (ours[i] + ref).norm()));
+    }
+    EXPECT_LT(worst, 1e-12) << "k = " << k;
+  }
 }
 
 TEST(NormalEstimation, InvalidInputs) {
