@@ -8,7 +8,10 @@
 #include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
 
+#include <malloc.h>
+
 #include <cctype>
+#include <climits>
 #include <cstdio>
 #include <string>
 #include <exception>
@@ -27,6 +30,16 @@ int main(int argc, char** argv) {
   // Ctrl-C or a kill while a file is being written: remove the temporary file, keep any earlier
   // output, and end as the signal says (exit status 128 + signal in a shell).
   tbs::remove_outputs_on_signal();
+#ifdef __GLIBC__
+  // glibc gives every block above 32 MB back to the system when it is freed, and the next one
+  // comes back as fresh pages, each faulted in and zeroed on first touch. A fit allocates and
+  // frees arrays of that size in every solve (the normal equations, CHOLMOD's factor), and
+  // those page faults took a third of the solve stage: 39 s -> 25 s at 200,000 points and
+  // degree 4 with freed memory kept for reuse (docs/benchmarks.md, "Large scans"). The
+  // library leaves malloc alone; this is the command's choice for its own process.
+  mallopt(M_MMAP_MAX, 0);
+  mallopt(M_TRIM_THRESHOLD, INT_MAX);
+#endif
   CLI::App app{"tbs " TBS_VERSION ": triangular B-spline (DMS spline) surfaces from 3D scans, "
                "for CAD.\nThis version fits splines to scans (with parameters (u, v), or raw meshes and "
                "point clouds, which it flattens first), inspects and evaluates .tbs splines, and "

@@ -11,6 +11,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -32,11 +33,35 @@ void group_by_triangle(std::span<const int> triangle, int triangle_count, std::v
 
 namespace {
 
+// The basis rows of one triangle's points, as the pattern pass computed them, for the
+// assembly pass: point q's row is entries start[q] .. start[q + 1] - 1 (start[q] < 0: the
+// point has no row). du and dv are kept only when the fairness term needs them.
+struct RowCache {
+  std::vector<int> start, index;
+  std::vector<double> value, du, dv;
+  bool filled = false;
+  size_t bytes() const {
+    return start.capacity() * sizeof(int) + index.capacity() * sizeof(int) +
+           (value.capacity() + du.capacity() + dv.capacity()) * sizeof(double);
+  }
+  void release() { *this = RowCache(); }
+};
+
+// One point's basis row, from the cache or from the evaluator.
+struct RowView {
+  const int* index;
+  const double *value, *du, *dv;
+  size_t size;
+};
+
 // Local normal equations of the points of one triangle, dense over its control points S.
 struct Local {
   std::vector<int> S;
-  std::vector<double> G;                // m x m, data term
-  std::array<std::vector<double>, 6> F;  // m x m, fairness: xx xy xz yy yz zz
+  // Row-major m x m, upper triangle only (entries (a, b >= a); the rest stays 0): the local
+  // indices of a basis row increase with its control-point indices, so every pair of a row
+  // lands there.
+  std::vector<double> G;  // data term
+  std::vector<double> F;  // fairness: 6 per entry (xx xy xz yy yz zz), side by side
   std::vector<double> rhs;              // m x 3
   std::vector<double> data_diag;        // m, diagonal of the data term alone
 };
@@ -150,7 +175,8 @@ void run(int threads, F&& f) {
 
 std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& eval,
                                          const FitPoints& pts, double lambda, int threads,
-                                         SolveTimes* times, Solver solver) {
+                                         SolveTimes* times, Solver solver,
+                                         size_t row_cache_bytes) {
   using Clock = std::chrono::steady_clock;
   auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
   auto t_stage = Clock::now();
@@ -185,15 +211,42 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
   const int own = beta_count(spline.degree());
   auto bend_level = [&](int t) { return pts.start[t + 1] - pts.start[t] >= own ? 1 : kBendLevel; };
   std::vector<std::vector<int>> support(T);
+  // The pattern pass keeps its basis rows for the assembly pass, triangle by triangle, while
+  // they fit in row_cache_bytes (the rest are computed again); the same rows either way.
+  std::vector<RowCache> cache(T);
+  std::atomic<size_t> cached_bytes{0};
   run(threads, [&] {
     tbb::parallel_for(0, T, [&](int t) {
       if (idle(t)) return;
       Scratch& sc = scratch.local();
       std::vector<int>& S = support[t];
+      RowCache& C = cache[t];
+      const bool keep = cached_bytes.load(std::memory_order_relaxed) < row_cache_bytes;
+      if (keep) C.start.reserve(static_cast<size_t>(pts.start[t + 1] - pts.start[t]) + 1);
       for (int q = pts.start[t]; q < pts.start[t + 1]; ++q) {
-        if (!point_row(sc, pts.uv[pts.order[q]])) continue;
+        if (!point_row(sc, pts.uv[pts.order[q]])) {
+          if (keep) C.start.push_back(-1);
+          continue;
+        }
+        if (keep) {
+          C.start.push_back(static_cast<int>(C.index.size()));
+          C.index.insert(C.index.end(), sc.row.index.begin(), sc.row.index.end());
+          C.value.insert(C.value.end(), sc.row.value.begin(), sc.row.value.end());
+          if (fair) {
+            C.du.insert(C.du.end(), sc.row.du.begin(), sc.row.du.end());
+            C.dv.insert(C.dv.end(), sc.row.dv.begin(), sc.row.dv.end());
+          }
+        }
         for (int j : sc.row.index)
           if (sc.where[j] < 0) sc.where[j] = 0, S.push_back(j);
+      }
+      if (keep) {
+        C.start.push_back(static_cast<int>(C.index.size()));
+        C.filled = true;
+        if (cached_bytes.fetch_add(C.bytes(), std::memory_order_relaxed) + C.bytes() > row_cache_bytes) {
+          cached_bytes.fetch_sub(C.bytes(), std::memory_order_relaxed);
+          C.release();
+        }
       }
       if (bends(t))
         for_bend_samples(eval, d, spline.degree(), t, bend_level(t), sc.bend, [&](const BendSample& b) {
@@ -268,27 +321,40 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
         const size_t m = L.S.size();
         for (size_t a = 0; a < m; ++a) sc.where[L.S[a]] = static_cast<int>(a);
         L.G.assign(m * m, 0.0);
-        if (fair)
-          for (auto& f : L.F) f.assign(m * m, 0.0);
+        if (fair) L.F.assign(m * m * 6, 0.0);
         L.rhs.assign(m * 3, 0.0);
         L.data_diag.assign(m, 0.0);
         std::vector<int> loc;
+        const RowCache& C = cache[t];
         for (int q = pts.start[t]; q < pts.start[t + 1]; ++q) {
           const int i = pts.order[q];
-          if (!point_row(sc, pts.uv[i])) continue;
-          const BasisRow& r = sc.row;
-          const size_t k = r.index.size();
+          RowView r;
+          if (C.filled) {
+            const size_t at = static_cast<size_t>(q - pts.start[t]);
+            if (C.start[at] < 0) continue;
+            size_t end = at + 1;
+            while (C.start[end] < 0) ++end;
+            const size_t b = static_cast<size_t>(C.start[at]);
+            r = {C.index.data() + b, C.value.data() + b, fair ? C.du.data() + b : nullptr,
+                 fair ? C.dv.data() + b : nullptr, static_cast<size_t>(C.start[end]) - b};
+          } else {
+            if (!point_row(sc, pts.uv[i])) continue;
+            r = {sc.row.index.data(), sc.row.value.data(), sc.row.du.data(), sc.row.dv.data(),
+                 sc.row.index.size()};
+          }
+          const size_t k = r.size;
           loc.resize(k);
           for (size_t a = 0; a < k; ++a) {
             loc[a] = sc.where[r.index[a]];
             if (loc[a] < 0) throw SolverError("internal: basis function outside its support set");
+            if (a > 0 && loc[a] <= loc[a - 1]) throw SolverError("internal: basis row not sorted");
           }
           const Point3& p = pts.p[i];
           const double pw = pts.point_weight(i);
           for (size_t a = 0; a < k; ++a) {
             const size_t ra = static_cast<size_t>(loc[a]) * m;
             const double wa = pw * r.value[a];
-            for (size_t b = 0; b < k; ++b) L.G[ra + loc[b]] += wa * r.value[b];
+            for (size_t b = a; b < k; ++b) L.G[ra + loc[b]] += wa * r.value[b];
             L.data_diag[loc[a]] += wa * r.value[a];
             for (int c = 0; c < 3; ++c) L.rhs[3 * loc[a] + c] += wa * p[c];
           }
@@ -298,9 +364,10 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
                                   nv.y() * nv.y(), nv.y() * nv.z(), nv.z() * nv.z()};
             for (size_t a = 0; a < k; ++a) {
               const size_t ra = static_cast<size_t>(loc[a]) * m;
-              for (size_t b = 0; b < k; ++b) {
+              for (size_t b = a; b < k; ++b) {
                 const double g = r.du[a] * r.du[b] + r.dv[a] * r.dv[b];
-                for (int c = 0; c < 6; ++c) L.F[c][ra + loc[b]] += g * nn[c];
+                double* f = &L.F[(ra + loc[b]) * 6];
+                for (int c = 0; c < 6; ++c) f[c] += g * nn[c];
               }
             }
           }
@@ -370,14 +437,16 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
         size_t pos = row_start[j];
         for (size_t b = a; b < m; ++b) {
           while (cols[pos] != L.S[b]) ++pos;
-          // Full local matrices are symmetric; take the upper part.
+          // The local matrices hold their upper triangle (b >= a).
           G[pos] += L.G[a * m + b];
           if (fair)
-            for (int c = 0; c < 6; ++c) F[c][pos] += L.F[c][a * m + b];
+            for (int c = 0; c < 6; ++c) F[c][pos] += L.F[(a * m + b) * 6 + c];
         }
       }
     }
   }
+
+  cache = std::vector<RowCache>();  // free before the factorisation
 
   // Regulariser scale: the mean diagonal of the data term over reached control points (the
   // smoothness terms left out: their scale follows the knot spacing, not the data).

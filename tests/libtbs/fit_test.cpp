@@ -20,6 +20,7 @@
 #include <filesystem>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <random>
 #include <stop_token>
@@ -805,43 +806,63 @@ TEST(Fit, DeterministicForAnyThreadCount) {
   EXPECT_EQ(format_tbs(fa), format_tbs(fb));
 }
 
+// A fit of a smooth random scan and the solver's input for its spline: the points located,
+// normals of the true surface, a bending weight everywhere.
+struct SolveCase {
+  Scan scan;
+  FitResult fit;
+  std::unique_ptr<Evaluator> eval;
+  std::vector<int> located, order, start;
+  std::vector<Vector3> normals;
+  std::vector<double> bend;
+  detail::FitPoints points() const {
+    return {scan.positions, normals, fit.uv, located, order, start, {}, bend};
+  }
+};
+
+SolveCase solve_case() {
+  const auto z = [](double u, double v) { return 0.1 * std::sin(5 * u) * std::cos(4 * v); };
+  SolveCase c;
+  c.scan = random_scan([&](double u, double v) { return Point3(u, v, z(u, v)); }, 4000, 21);
+  FitOptions o;
+  o.tolerance = 5e-4;
+  c.fit = fit(c.scan, o);
+  c.eval = std::make_unique<Evaluator>(c.fit.spline);
+  c.located.resize(c.fit.uv.size());
+  c.normals.resize(c.fit.uv.size());
+  for (size_t i = 0; i < c.fit.uv.size(); ++i) {
+    c.located[i] = c.eval->locate(c.fit.uv[i]);
+    const double u = c.fit.uv[i].x(), v = c.fit.uv[i].y();
+    const double zu = 0.5 * std::cos(5 * u) * std::cos(4 * v), zv = -0.4 * std::sin(5 * u) * std::sin(4 * v);
+    c.normals[i] = Vector3(-zu, -zv, 1).normalized();
+  }
+  const int T = c.fit.spline.domain().triangle_count();
+  detail::group_by_triangle(c.located, T, c.order, c.start);
+  c.bend.assign(T, 1e-7);
+  return c;
+}
+
 // The three ways of solving the control-point system give the same control points to rounding:
 // the split solve (the default: the scalar matrix factorised, conjugate gradients on the
 // fairness term's coupling) and the coupled system factorised supernodal and simplicial (the
 // solver before). With the fairness term (coordinates coupled) and without, the bending term
 // on. The fit's report counts its solves and the size of the last one.
 TEST(FitSolve, SplitAndCoupledSolvesAgreeToRounding) {
-  const auto z = [](double u, double v) { return 0.1 * std::sin(5 * u) * std::cos(4 * v); };
-  const Scan s = random_scan([&](double u, double v) { return Point3(u, v, z(u, v)); }, 4000, 21);
-  FitOptions o;
-  o.tolerance = 5e-4;
-  const FitResult r = fit(s, o);
+  const SolveCase c = solve_case();
+  const FitResult& r = c.fit;
   const int N = r.spline.control_point_count();
   EXPECT_GE(r.report.solve_stages.solves, r.report.iterations);
   EXPECT_GE(r.report.solve_stages.cg_iterations, r.report.solve_stages.solves);
   EXPECT_EQ(r.report.solve_stages.unknowns, N);
   EXPECT_GT(r.report.solve_stages.nonzeros, N);
-
-  const Evaluator ev(r.spline);
-  std::vector<int> located(r.uv.size()), order, start;
-  std::vector<Vector3> normals(r.uv.size());
-  for (size_t i = 0; i < r.uv.size(); ++i) {
-    located[i] = ev.locate(r.uv[i]);
-    const double u = r.uv[i].x(), v = r.uv[i].y();
-    const double zu = 0.5 * std::cos(5 * u) * std::cos(4 * v), zv = -0.4 * std::sin(5 * u) * std::sin(4 * v);
-    normals[i] = Vector3(-zu, -zv, 1).normalized();
-  }
-  const int T = r.spline.domain().triangle_count();
-  detail::group_by_triangle(located, T, order, start);
-  const std::vector<double> bend(T, 1e-7);
-  const detail::FitPoints pts{s.positions, normals, r.uv, located, order, start, {}, bend};
+  const detail::FitPoints pts = c.points();
   for (const double lambda : {1e-3, 0.0}) {
     SCOPED_TRACE(lambda);
     detail::SolveTimes times;
-    const auto a = detail::solve_control_points(r.spline, ev, pts, lambda, 2, &times, detail::Solver::Split);
+    const auto a = detail::solve_control_points(r.spline, *c.eval, pts, lambda, 2, &times, detail::Solver::Split);
     ASSERT_EQ(a.size(), static_cast<size_t>(N));
     for (const auto solver : {detail::Solver::CoupledSupernodal, detail::Solver::CoupledSimplicial}) {
-      const auto b = detail::solve_control_points(r.spline, ev, pts, lambda, 2, nullptr, solver);
+      const auto b = detail::solve_control_points(r.spline, *c.eval, pts, lambda, 2, nullptr, solver);
       ASSERT_EQ(b.size(), a.size());
       double diff = 0, size = 0;
       for (int j = 0; j < N; ++j) diff = std::max(diff, (a[j] - b[j]).norm()), size = std::max(size, b[j].norm());
@@ -852,6 +873,24 @@ TEST(FitSolve, SplitAndCoupledSolvesAgreeToRounding) {
     // Without the coupling the scalar factor solves it exactly, no iterations.
     if (lambda == 0) EXPECT_EQ(times.cg_iterations, 0);
     else EXPECT_GE(times.cg_iterations, 1);
+  }
+}
+
+// The basis rows kept from the pattern pass for the assembly pass (all, some, none) give the
+// same control points bit for bit.
+TEST(FitSolve, KeptBasisRowsChangeNothing) {
+  const SolveCase c = solve_case();
+  const detail::FitPoints pts = c.points();
+  for (const double lambda : {1e-3, 0.0}) {
+    SCOPED_TRACE(lambda);
+    const auto solve = [&](size_t bytes) {
+      return detail::solve_control_points(c.fit.spline, *c.eval, pts, lambda, 2, nullptr,
+                                          detail::Solver::Split, bytes);
+    };
+    const std::vector<Point3> all = solve(detail::kRowCacheBytes);
+    EXPECT_EQ(solve(0), all);
+    EXPECT_EQ(solve(1), all);          // every triangle's rows over the limit
+    EXPECT_EQ(solve(64 << 10), all);   // the first triangles' rows kept, the others not
   }
 }
 
