@@ -730,6 +730,14 @@ ParameterizedScan parameterize_scan(const Scan& scan, const ParameterizeOptions&
     for (const Point3& p : scan.positions) pts.emplace_back(p.x(), p.y(), p.z());
     std::vector<std::array<std::size_t, 3>> facets;
     CGAL::advancing_front_surface_reconstruction(pts.begin(), pts.end(), std::back_inserter(facets));
+    // The reconstruction lists its facets in an order that follows memory addresses, so the
+    // same points gave them in another order (and the fit other rounding) from one process
+    // layout to the next, e.g. the command with and without --threads. Each facet now starts
+    // at its smallest index (orientation kept) and the facets are sorted. Which facets it
+    // picks can still depend on addresses where two border edges tie in priority (it orders
+    // them by (priority, pointer)): the same input run twice in one process may mesh twice.
+    for (auto& f : facets) std::rotate(f.begin(), std::min_element(f.begin(), f.end()), f.end());
+    std::sort(facets.begin(), facets.end());
     for (const auto& f : facets) triangles.push_back({int(f[0]), int(f[1]), int(f[2])});
     rep.reconstructed_faces = triangles.size();
     if (triangles.empty())
