@@ -152,7 +152,8 @@ namespace {
 // `tbs fit` on synthetic scans of 100k to 1M points at degrees 2 to 5 with 1,195 to 101,398
 // control points (bench/memory_bench.sh and bench/solve_profile.sh, docs/benchmarks.md
 // "Memory", 2026-12-05, after the split solve): at or above every row, by at most 37 %,
-// before the safety factor.
+// before the safety factor. The kept basis rows (fit_solve.h) came later with their own term;
+// with them every row is still below the estimate (the night's table there).
 constexpr double kMemoryBase = 40e6;
 constexpr double kMemoryPerPoint = 420;
 constexpr double kMemoryPerControlPoint = 290;  // times b^1.75

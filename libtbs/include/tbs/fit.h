@@ -168,7 +168,8 @@ struct FitResult {
 /// Estimated peak memory (bytes) of fit() on `points` points at degree n while its spline has
 /// `control_points` control points, the scan itself included. A model fitted to the peaks
 /// measured on synthetic scans of 100k to 1M points at degrees 2 to 5 (docs/benchmarks.md,
-/// section "Memory"), plus a quarter for safety. Throws nothing.
+/// section "Memory"; measured with the `tbs` command, which keeps freed memory for reuse),
+/// plus a quarter for safety. Throws nothing.
 size_t estimate_fit_memory(size_t points, int degree, size_t control_points);
 
 /// The control points of the initial domain fit() builds for `points` points (the domain
