@@ -34,8 +34,9 @@ void group_by_triangle(std::span<const int> triangle, int triangle_count, std::v
 namespace {
 
 // The basis rows of one triangle's points, as the pattern pass computed them, for the
-// assembly pass: point q's row is entries start[q] .. start[q + 1] - 1 (start[q] < 0: the
-// point has no row). du and dv are kept only when the fairness term needs them.
+// assembly pass: point q's row is entries start[q] .. start[q + 1] - 1 (empty for a point
+// the evaluator gives no row: it adds nothing either way). du and dv are kept only when the
+// fairness term needs them.
 struct RowCache {
   std::vector<int> start, index;
   std::vector<double> value, du, dv;
@@ -224,12 +225,9 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
       const bool keep = cached_bytes.load(std::memory_order_relaxed) < row_cache_bytes;
       if (keep) C.start.reserve(static_cast<size_t>(pts.start[t + 1] - pts.start[t]) + 1);
       for (int q = pts.start[t]; q < pts.start[t + 1]; ++q) {
-        if (!point_row(sc, pts.uv[pts.order[q]])) {
-          if (keep) C.start.push_back(-1);
-          continue;
-        }
+        if (keep) C.start.push_back(static_cast<int>(C.index.size()));
+        if (!point_row(sc, pts.uv[pts.order[q]])) continue;
         if (keep) {
-          C.start.push_back(static_cast<int>(C.index.size()));
           C.index.insert(C.index.end(), sc.row.index.begin(), sc.row.index.end());
           C.value.insert(C.value.end(), sc.row.value.begin(), sc.row.value.end());
           if (fair) {
@@ -331,12 +329,9 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
           RowView r;
           if (C.filled) {
             const size_t at = static_cast<size_t>(q - pts.start[t]);
-            if (C.start[at] < 0) continue;
-            size_t end = at + 1;
-            while (C.start[end] < 0) ++end;
             const size_t b = static_cast<size_t>(C.start[at]);
             r = {C.index.data() + b, C.value.data() + b, fair ? C.du.data() + b : nullptr,
-                 fair ? C.dv.data() + b : nullptr, static_cast<size_t>(C.start[end]) - b};
+                 fair ? C.dv.data() + b : nullptr, static_cast<size_t>(C.start[at + 1]) - b};
           } else {
             if (!point_row(sc, pts.uv[i])) continue;
             r = {sc.row.index.data(), sc.row.value.data(), sc.row.du.data(), sc.row.dv.data(),
