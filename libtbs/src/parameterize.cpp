@@ -38,6 +38,58 @@
 #include <queue>
 #include <unordered_map>
 
+// CGAL's advancing-front reconstruction, made to depend on the points alone. Two things in it
+// followed memory addresses, so the same points meshed differently from one process layout to
+// the next (the command against Python, or a second call in one process):
+// - its border edges wait in a std::set ordered by (priority, pointer), and equal priorities
+//   are common (the same candidate facet for two edges, the fixed marks for edges put off);
+// - its clean-up removes vertices from the Delaunay triangulation, whose re-triangulation
+//   orders and hashes vertex and cell handles by address.
+// Here the handles carry time stamps (CGAL's Compact_container then compares and hashes them
+// by creation order, as Mesh_3 does for the same reason) and equal priorities go by the
+// indices of the edge's two points, which identify a border edge for as long as it waits.
+namespace tbs::afsr {
+
+template <typename Base>
+struct Stamped : Base {
+  using Base::Base;
+  template <typename Tds2>
+  struct Rebind_TDS {
+    using Other = Stamped<typename Base::template Rebind_TDS<Tds2>::Other>;
+  };
+  using Has_timestamp = CGAL::Tag_true;
+  std::size_t time_stamp() const { return stamp; }
+  void set_time_stamp(const std::size_t& s) { stamp = s; }
+  std::size_t stamp = std::size_t(-1);
+};
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Tds = CGAL::Triangulation_data_structure_3<
+    Stamped<CGAL::Advancing_front_surface_reconstruction_vertex_base_3<Kernel>>,
+    Stamped<CGAL::Advancing_front_surface_reconstruction_cell_base_3<Kernel>>>;
+using Delaunay = CGAL::Delaunay_triangulation_3<Kernel, Tds>;
+using Vertex = Delaunay::Vertex;
+using WaitingEdge = Vertex::Radius_ptr_type;  // (priority, the border edge's facets)
+static_assert(CGAL::internal::Has_timestamp<Vertex>::value && CGAL::internal::Has_timestamp<Delaunay::Cell>::value);
+
+}  // namespace tbs::afsr
+
+// Must be seen before Advancing_front_surface_reconstruction<afsr::Delaunay> instantiates its set.
+template <>
+struct std::less<tbs::afsr::WaitingEdge> {
+  static std::pair<std::size_t, std::size_t> ends(const tbs::afsr::Vertex::IO_edge_type* e) {
+    const auto& edge = e->first.first;  // (cell, i, j): the edge from vertex i to vertex j
+    const std::size_t a = edge.first->vertex(edge.second)->info(), b = edge.first->vertex(edge.third)->info();
+    return a < b ? std::make_pair(a, b) : std::make_pair(b, a);
+  }
+  bool operator()(const tbs::afsr::WaitingEdge& x, const tbs::afsr::WaitingEdge& y) const {
+    if (x.first != y.first) return x.first < y.first;
+    if (x.second == y.second) return false;
+    const auto ex = ends(x.second), ey = ends(y.second);
+    return ex != ey ? ex < ey : x.second < y.second;  // one entry per border edge: the last never decides
+  }
+};
+
 namespace tbs {
 
 namespace {
@@ -725,17 +777,18 @@ ParameterizedScan parameterize_scan(const Scan& scan, const ParameterizeOptions&
         throw InvalidInput(name + ": all points lie on one line; there is no surface to fit");
     }
     say("reconstructing a surface from " + plural(scan.positions.size(), "point", "points") + " (advancing front)");
-    std::vector<P3> pts;
+    std::vector<std::pair<P3, std::size_t>> pts;  // each point with its index
     pts.reserve(scan.positions.size());
-    for (const Point3& p : scan.positions) pts.emplace_back(p.x(), p.y(), p.z());
+    for (const Point3& p : scan.positions) pts.emplace_back(P3(p.x(), p.y(), p.z()), pts.size());
     std::vector<std::array<std::size_t, 3>> facets;
-    CGAL::advancing_front_surface_reconstruction(pts.begin(), pts.end(), std::back_inserter(facets));
-    // The reconstruction lists its facets in an order that follows memory addresses, so the
-    // same points gave them in another order (and the fit other rounding) from one process
-    // layout to the next, e.g. the command with and without --threads. Each facet now starts
-    // at its smallest index (orientation kept) and the facets are sorted. Which facets it
-    // picks can still depend on addresses where two border edges tie in priority (it orders
-    // them by (priority, pointer)): the same input run twice in one process may mesh twice.
+    {
+      afsr::Delaunay dt(pts.begin(), pts.end());
+      CGAL::Advancing_front_surface_reconstruction<afsr::Delaunay> reconstruction(dt);
+      reconstruction.run();  // CGAL's defaults: radius ratio bound 5, beta 0.52
+      CGAL::write_triple_indices(std::back_inserter(facets), reconstruction);
+    }
+    // The facets come in the order of the reconstruction's surface data structure: each now
+    // starts at its smallest index (orientation kept) and they are sorted.
     for (auto& f : facets) std::rotate(f.begin(), std::min_element(f.begin(), f.end()), f.end());
     std::sort(facets.begin(), facets.end());
     for (const auto& f : facets) triangles.push_back({int(f[0]), int(f[1]), int(f[2])});
