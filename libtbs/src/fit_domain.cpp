@@ -842,8 +842,24 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
         anchors = {0};
         if (far != 0) anchors.push_back(far);
       }
+      // Seam ends: where a closed surface was cut open, the loop runs out along one copy of the
+      // seam and back along the other, and at each end of the seam it turns around a vertex
+      // whose two loop neighbours are the same 3D point. The notch there must stay open: bridged,
+      // the domain spans two copies of one curve, and the surface over it has to fold.
+      std::vector<char> pinned(L, 0);
+      if (!in.positions.empty())
+        for (size_t i = 0; i < L; ++i) {
+          const int a = loop[(i + L - 1) % L], b = loop[(i + 1) % L], v = loop[i];
+          const double out_and_back = (in.positions[a] - in.positions[v]).norm() + (in.positions[b] - in.positions[v]).norm();
+          if (a != b && (in.positions[a] - in.positions[b]).norm() <= 0.05 * out_and_back && out_and_back > 0) pinned[i] = 1;
+        }
+      for (size_t i = 0; i < L; ++i)
+        if (pinned[i] && std::find(anchors.begin(), anchors.end(), i) == anchors.end()) anchors.push_back(i);
+      std::sort(anchors.begin(), anchors.end());
       std::vector<char> keep(L, 0);
       for (size_t a : anchors) keep[a] = 1;
+      for (size_t i = 0; i < L; ++i)
+        if (pinned[i]) keep[(i + L - 1) % L] = keep[(i + 1) % L] = 1;
       for (size_t k = 0; k < anchors.size(); ++k) {
         const size_t i = anchors[k], j = k + 1 < anchors.size() ? anchors[k + 1] : anchors[0] + L;
         std::vector<Point2> piece;
@@ -882,7 +898,13 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
         const Point2 p = in.uv[loop[kept[e]]];
         const double d1 = off[prev], d2 = off[e];
         Point2 q = p;
-        if (d1 > 0 || d2 > 0) {
+        if (pinned[kept[e]]) {
+          // A seam end stays where it is (moved out by the least step, as every edge is): its
+          // edges to its loop neighbours, kept too, drop no point.
+          const Vector2 sum = normal[prev] + normal[e];
+          const Vector2 b = sum.norm() > 1e-12 ? Vector2(sum.normalized()) : normal[e];
+          q = p + b * (4 * m.grid);
+        } else if (d1 > 0 || d2 > 0) {
           // Along the bisector b of the two outward normals, far enough that both edges move
           // out by at least their offset: n_i . x = max(d1, d2) (n_i . b = cos(half angle)).
           const Vector2 sum = normal[prev] + normal[e];
