@@ -284,7 +284,10 @@ struct Say {
 void print_parameterization(const ParameterizeReport& p) {
   std::printf("%-18s %s, %zu points%s; %s\n", "parameterized", p.input.c_str(), p.input_points,
               p.input == "mesh" ? (", " + std::to_string(p.input_faces) + " faces").c_str()
-                                : (", reconstructed " + std::to_string(p.reconstructed_faces) + " faces").c_str(),
+                                : (", reconstructed " + std::to_string(p.reconstructed_faces) + " faces" +
+                                   (p.bridge_faces_removed ? " (" + std::to_string(p.bridge_faces_removed) +
+                                                                 " spanning gaps removed)" : std::string()))
+                                      .c_str(),
               p.topology.describe().c_str());
   std::string repairs;
   auto add = [&](size_t n, const char* what) {

@@ -708,7 +708,10 @@ std::string ParameterizeReport::to_json() const {
   j["input"] = input;
   j["input_points"] = input_points;
   j["input_faces"] = input_faces;
-  if (input == "point cloud") j["reconstructed_faces"] = reconstructed_faces;
+  if (input == "point cloud") {
+    j["reconstructed_faces"] = reconstructed_faces;
+    j["bridge_faces_removed"] = bridge_faces_removed;
+  }
   j["repair"] = {{"vertices_merged", vertices_merged},
                  {"faces_removed", faces_removed},
                  {"vertices_split", vertices_split},
@@ -783,9 +786,40 @@ ParameterizedScan parameterize_scan(const Scan& scan, const ParameterizeOptions&
     std::vector<std::array<std::size_t, 3>> facets;
     {
       afsr::Delaunay dt(pts.begin(), pts.end());
+      // The local spacing of each point: its third-nearest Delaunay neighbour (the nearest
+      // neighbours are among them), before the reconstruction removes any vertex.
+      std::vector<double> spacing(pts.size(), 0.0);
+      std::vector<double> len;
+      std::vector<afsr::Delaunay::Vertex_handle> around;
+      for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) {
+        around.clear();
+        len.clear();
+        dt.finite_adjacent_vertices(v, std::back_inserter(around));
+        for (auto w : around) len.push_back(std::sqrt(CGAL::squared_distance(v->point(), w->point())));
+        if (len.empty()) continue;
+        const auto k = static_cast<long>(std::min<size_t>(2, len.size() - 1));
+        std::nth_element(len.begin(), len.begin() + k, len.end());
+        spacing[v->info()] = len[static_cast<size_t>(k)];
+      }
       CGAL::Advancing_front_surface_reconstruction<afsr::Delaunay> reconstruction(dt);
       reconstruction.run();  // CGAL's defaults: radius ratio bound 5, beta 0.52
       CGAL::write_triple_indices(std::back_inserter(facets), reconstruction);
+      // Bridges: a face with an edge longer than kBridgeRatio times the spacing at both of its
+      // ends spans a gap in the samples (the reconstruction joins separate clusters of points
+      // that way). Such long, thin faces made LSCM fold on poste_france.xyz and its fallback
+      // distort the map 90-fold; they are removed, and a cluster they alone held on becomes a
+      // component of its own.
+      constexpr double kBridgeRatio = 20;
+      const size_t before = facets.size();
+      std::erase_if(facets, [&](const std::array<std::size_t, 3>& f) {
+        for (int k = 0; k < 3; ++k) {
+          const std::size_t a = f[k], b = f[(k + 1) % 3];
+          if ((scan.positions[a] - scan.positions[b]).norm() > kBridgeRatio * std::max(spacing[a], spacing[b]))
+            return true;
+        }
+        return false;
+      });
+      rep.bridge_faces_removed = before - facets.size();
     }
     // The facets come in the order of the reconstruction's surface data structure: each now
     // starts at its smallest index (orientation kept) and they are sorted.

@@ -294,6 +294,30 @@ TEST(Parameterize, PointCloudIsReconstructedAndProjected) {
   EXPECT_TRUE(r.report.converged) << r.report.stop_reason;
 }
 
+TEST(Parameterize, FacesSpanningAGapInACloudAreRemoved) {
+  // A sheet of 40 x 40 points (spacing 1/39) and, 2 units beyond its edge, a patch of 5 x 5
+  // (spacing 0.025): the reconstruction joins the two by faces 50 times longer than the
+  // spacing. They are removed, the patch becomes a component of its own and the sheet, the
+  // larger one, is flattened alone (before, one component: the map spanned both).
+  std::mt19937_64 rng(1);
+  std::normal_distribution<double> noise(0, 1e-4);
+  Scan in;
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 40; ++j) {
+      const double x = i / 39.0, y = j / 39.0;
+      const double dx = noise(rng), dy = noise(rng), dz = noise(rng);
+      in.positions.push_back({x + dx, y + dy, 0.1 * std::sin(3 * x) + dz});
+    }
+  for (int i = 0; i < 5; ++i)
+    for (int j = 0; j < 5; ++j) in.positions.push_back({3 + 0.025 * i, 0.5 + 0.025 * j, 0});
+  const ParameterizedScan p = parameterize_scan(in);
+  EXPECT_GT(p.report.bridge_faces_removed, 0u);
+  EXPECT_EQ(p.report.topology.components, 2);
+  EXPECT_EQ(p.report.points_dropped, 25u);
+  for (size_t i = 0; i < p.scan.positions.size(); ++i) EXPECT_LT(p.source[i], 1600u);
+  EXPECT_NE(p.report.to_json().find("\"bridge_faces_removed\":" + std::to_string(p.report.bridge_faces_removed)), std::string::npos);
+}
+
 TEST(Parameterize, SubdivisionPutsNewPointsOnASmoothSurface) {
   // A coarse sphere (neighbouring faces turn by about 20 degrees, below the sharp angle): the
   // new points lie much closer to the sphere than the flat faces do.
@@ -404,7 +428,8 @@ TEST(Parameterize, CgalDemoMeshes) {
                                          {"meshes/lion.off", 1, 5, 0},
                                          {"meshes/patch-20.off", 1, 1, 0},
                                          {"meshes/sphere966.off", 1, 0, 0},
-                                         {"points_3/radar.xyz", 1, 4, 0}}) {
+                                         // radar: 4 loops until its 9 faces spanning gaps were removed
+                                         {"points_3/radar.xyz", 1, 5, 0}}) {
     SCOPED_TRACE(c.file);
     const Scan in = read_scan((dir / "data" / c.file).string());
     const ParameterizedScan p = parameterize_scan(in);

@@ -68,6 +68,7 @@ struct ParameterizeReport {
   std::string input;                   ///< "mesh" or "point cloud"
   size_t input_points = 0, input_faces = 0;
   size_t reconstructed_faces = 0;      ///< point clouds: faces of the reconstructed mesh
+  size_t bridge_faces_removed = 0;     ///< point clouds: reconstructed faces spanning a gap (an edge over 20 local spacings), removed
   size_t vertices_merged = 0;          ///< duplicate vertices merged
   size_t faces_removed = 0;            ///< degenerate (repeated-corner, zero-area) and duplicate faces
   size_t vertices_split = 0;           ///< copies made to repair non-manifold vertices and edges
