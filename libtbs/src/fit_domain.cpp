@@ -753,8 +753,9 @@ struct FitDomain::Impl {
   }
 
   WCdt::Vertex_handle add_vertex(const Point2& p) {
+    const auto count = cdt.number_of_vertices();
     auto v = cdt.insert(cp(p));
-    if (v->info() < 0 || v->info() >= next_id || handle_of[v->info()] != v) {
+    if (cdt.number_of_vertices() != count) {  // a new vertex, whose info() is not set yet
       v->info() = next_id++;
       handle_of.push_back(v);
     }
