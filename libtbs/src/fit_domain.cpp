@@ -845,14 +845,17 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
       }
       // Seam ends: where a closed surface was cut open, the loop runs out along one copy of the
       // seam and back along the other, and at each end of the seam it turns around a vertex
-      // whose two loop neighbours are the same 3D point. The notch there must stay open: bridged,
-      // the domain spans two copies of one curve, and the surface over it has to fold.
+      // whose two loop neighbours are (nearly: within 5 % of the way out and back) the same 3D
+      // point. The notch there must stay open: bridged, the domain spans two copies of one
+      // curve, and the surface over it has to fold.
       std::vector<char> pinned(L, 0);
-      if (!in.positions.empty())
+      if (!in.positions.empty() && L > 2)
         for (size_t i = 0; i < L; ++i) {
-          const int a = loop[(i + L - 1) % L], b = loop[(i + 1) % L], v = loop[i];
-          const double out_and_back = (in.positions[a] - in.positions[v]).norm() + (in.positions[b] - in.positions[v]).norm();
-          if (a != b && (in.positions[a] - in.positions[b]).norm() <= 0.05 * out_and_back && out_and_back > 0) pinned[i] = 1;
+          const Point3& a = in.positions[loop[(i + L - 1) % L]];
+          const Point3& b = in.positions[loop[(i + 1) % L]];
+          const Point3& v = in.positions[loop[i]];
+          const double out_and_back = (a - v).norm() + (b - v).norm();
+          if (out_and_back > 0 && (a - b).norm() <= 0.05 * out_and_back) pinned[i] = 1;
         }
       for (size_t i = 0; i < L; ++i)
         if (pinned[i] && std::find(anchors.begin(), anchors.end(), i) == anchors.end()) anchors.push_back(i);
@@ -899,20 +902,16 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
         const Point2 p = in.uv[loop[kept[e]]];
         const double d1 = off[prev], d2 = off[e];
         Point2 q = p;
-        if (pinned[kept[e]]) {
-          // A seam end stays where it is (moved out by the least step, as every edge is): its
-          // edges to its loop neighbours, kept too, drop no point.
-          const Vector2 sum = normal[prev] + normal[e];
-          const Vector2 b = sum.norm() > 1e-12 ? Vector2(sum.normalized()) : normal[e];
-          q = p + b * (4 * m.grid);
-        } else if (d1 > 0 || d2 > 0) {
+        const bool seam_end = pinned[kept[e]];
+        if (seam_end || d1 > 0 || d2 > 0) {
           // Along the bisector b of the two outward normals, far enough that both edges move
           // out by at least their offset: n_i . x = max(d1, d2) (n_i . b = cos(half angle)).
+          // A seam end moves by the least step only: its edges to its loop neighbours, kept
+          // too, drop no point.
           const Vector2 sum = normal[prev] + normal[e];
           const Vector2 b = sum.norm() > 1e-12 ? Vector2(sum.normalized()) : normal[e];
           const double c = std::max(normal[e].dot(b), 0.25);
-          const Vector2 x = b * (std::max(d1, d2) / c);
-          q = p + x;
+          q = p + b * (seam_end ? 4 * m.grid : std::max(d1, d2) / c);
         }
         poly.push_back(q);
         if (forced[loop[kept[e]]]) moved[loop[kept[e]]] = q;
