@@ -310,6 +310,9 @@ void print_parameterization(const ParameterizeReport& p) {
               p.fallback_reason.empty() ? "" : (" (" + p.fallback_reason + ")").c_str());
   std::printf("%-18s angle %.3f mean, %.3g max; area %.3f mean, %.3g max (1 = none)\n", "distortion",
               p.distortion.angle_mean, p.distortion.angle_max, p.distortion.area_mean, p.distortion.area_max);
+  if (p.method == "LSCM, areas relaxed")
+    std::printf("%-18s angle %.3f mean, %.3g max; area %.3f mean, %.3g max (LSCM before relaxing)\n", "",
+                p.conformal.angle_mean, p.conformal.angle_max, p.conformal.area_mean, p.conformal.area_max);
   if (p.points_projected) std::printf("%-18s %zu (parameter of the closest mesh point)\n", "points projected", p.points_projected);
   if (p.points_dropped) std::printf("%-18s %zu (other components, unused or merged vertices)\n", "points dropped", p.points_dropped);
 }

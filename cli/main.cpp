@@ -134,8 +134,9 @@ int main(int argc, char** argv) {
                     "Scans without (u, v): fit every component, each to its own files OUT-K.tbs "
                     "(and REPORT-K.json, EXPORT-K.ext)");
   fit_cmd->add_option("--flatten", fit.flatten,
-                      "Scans without (u, v): auto (LSCM, or mean-value coordinates if LSCM folds), "
-                      "lscm, or mean-value")
+                      "Scans without (u, v): auto (LSCM, relaxed toward equal areas where it shrinks "
+                      "parts of the surface tenfold on average; mean-value coordinates if LSCM folds), "
+                      "lscm (the conformal map alone), or mean-value")
       ->check(CLI::IsMember({"auto", "lscm", "mean-value"}))->capture_default_str();
   fit_cmd->add_option("--max-points", fit.max_points,
                       "Refuse scans with more points than this, before reading them (a fit takes about "

@@ -5,7 +5,7 @@
 # invalid shell with exit 5), and the region-face files read back by FreeCAD
 # (freecad_shape_check.py: valid, one shell, the reported faces, one free loop per boundary loop).
 # Every point the fit counts as fitted evaluates through `tbs eval` (fitted_points_check.py).
-# No domain triangle folds (but on lion, issue 19).
+# No domain triangle folds (but on lion, issue 19), and max_stretch is at most 20.
 #   raw_scan_check.sh TBS_EXE WORK_DIR DATA_FILE
 #     DATA_FILE inside the tarball, e.g. data/meshes/head.off
 # Exports: region faces at the default CAD tolerance as STEP and IGES, triangle patches (CAD
@@ -32,17 +32,20 @@ r = json.load(open(sys.argv[1]))
 p = r["parameterization"]
 assert r["converged"], "the fit did not converge: " + r["stop_reason"]
 assert r["max_error"] <= r["tolerance"] * (1 + 1e-9), (r["max_error"], r["tolerance"])
-assert p["method"] in ("LSCM", "mean value (circular boundary)"), p["method"]
+assert p["method"] in ("LSCM", "LSCM, areas relaxed", "mean value (circular boundary)"), p["method"]
 assert p["component_topology"]["genus"] == 0
-# No folded domain triangle, except on lion, where issue 19 is still open (folds inside the
-# data where the flattening compresses it, and in bridged holes). sphere966 folded in 13
+# No folded domain triangle, except on lion, where issue 19 is still open (6 folds since its
+# flattening is relaxed toward equal areas, 28 before: docs/benchmarks.md). sphere966 folded in 13
 # triangles at its seam ends until the outline kept the seam's notches open, poste_france.xyz
 # in 16 until faces spanning gaps in the cloud were removed (2026-12-06).
 known = {"lion.json"}
 if sys.argv[1].split("/")[-1] not in known:
     assert r["folds"] == 0, "%d folded domain triangles" % r["folds"]
-print("parameterized by %s, angle distortion %.3f, area distortion %.3f; converged, max error %.3g, %d folds"
-      % (p["method"], p["angle_distortion"]["mean"], p["area_distortion"]["mean"], r["max_error"], r["folds"]))
+# Issue 19's bound on the largest |F_u|, |F_v| (times the domain's diameter, over the model
+# size); head (28.8) and lion (42.6) were above it until their flattenings were relaxed.
+assert r["max_stretch"] <= 20, "max_stretch %.3g" % r["max_stretch"]
+print("parameterized by %s, angle distortion %.3f, area distortion %.3f; converged, max error %.3g, %d folds, max_stretch %.3g"
+      % (p["method"], p["angle_distortion"]["mean"], p["area_distortion"]["mean"], r["max_error"], r["folds"], r["max_stretch"]))
 PY
 relaxed=(--cad-tolerance 1e-3 --angle-tolerance 20)
 "$tbs" convert "$out.tbs" "$out.step" --report "$out.step.json" | tee "$out.step.txt"

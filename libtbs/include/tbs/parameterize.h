@@ -30,9 +30,12 @@ MeshTopology mesh_topology(size_t vertex_count, const std::vector<std::array<int
 
 enum class FlattenMethod {
   /// LSCM; if it folds (a triangle flipped, or the boundary crossing itself), mean-value
-  /// coordinates with the outer boundary on a circle, which cannot fold.
+  /// coordinates with the outer boundary on a circle, which cannot fold. A fold-free LSCM map
+  /// whose mean area distortion is above 10 (a part of the surface shrunk tenfold and more, as
+  /// on a near-closed surface opened at a small loop) is relaxed toward equal areas, halfway
+  /// on a log scale, without folding (SLIM on the symmetric Dirichlet energy).
   Auto,
-  Lscm,       ///< LSCM only: an error if it folds
+  Lscm,       ///< LSCM only, never relaxed: an error if it folds
   MeanValue,  ///< mean-value coordinates, circular outer boundary (holes filled while solving)
 };
 
@@ -78,9 +81,11 @@ struct ParameterizeReport {
   int component = 1;                   ///< the component flattened (1 = largest)
   MeshTopology used;                   ///< of that component (before any seam cut)
   size_t seam_edges = 0;               ///< a closed surface was cut open along this many edges
-  std::string method;                  ///< "LSCM" or "mean value (circular boundary)"
+  std::string method;                  ///< "LSCM", "LSCM, areas relaxed" or "mean value (circular boundary)"
   std::string fallback_reason;         ///< why LSCM was not kept; empty if it was
   Distortion distortion;
+  /// "LSCM, areas relaxed": the distortion of the conformal map before it was relaxed.
+  Distortion conformal;
   size_t points_projected = 0;         ///< point clouds: points given the parameter of their closest mesh point
   size_t points_dropped = 0;           ///< points of other components, or not on the mesh
   int subdivisions = 0;                ///< 1-to-4 subdivisions of a coarse mesh (min_points)
