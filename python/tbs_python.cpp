@@ -419,8 +419,9 @@ PYBIND11_MODULE(tbs, m) {
         py::arg("min_points") = 0, py::arg("sharp_angle") = 40.0, py::arg("progress") = py::none(),
         "Parameters (u, v) for a scan without them, as `tbs fit` computes them: a mesh (faces (F, "
         "3)) is repaired, its component `component` (1 = the largest; 0 the same) chosen, cut open if "
-        "closed and flattened (method 'auto': LSCM, or mean-value coordinates if LSCM folds; 'lscm'; "
-        "'mean-value'); a point cloud (faces None) is meshed first. min_points > 0 subdivides a coarse "
+        "closed and flattened (method 'auto': LSCM, relaxed toward equal areas where it shrinks parts "
+        "of the surface tenfold on average, or mean-value coordinates if LSCM folds; 'lscm', the "
+        "conformal map alone; 'mean-value'); a point cloud (faces None) is meshed first. min_points > 0 subdivides a coarse "
         "mesh 1-to-4 until it has that many points. Returns a dict: points (M, 3), uv (M, 2), faces "
         "(F, 3) or None, normals (M, 3) or None, guide (M,) or None (True for the points the "
         "subdivision added), which fit() takes as they are; source (M,), the input point of each point; report, as `tbs fit --report` gives it under parameterization. "
