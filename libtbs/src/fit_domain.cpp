@@ -4,6 +4,7 @@
 #include <tbs/predicates.h>
 
 #include "box_grid.h"
+#include "nesting_levels.h"
 
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Delaunay_mesh_face_base_2.h>
@@ -21,7 +22,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <deque>
 #include <map>
 #include <numbers>
 #include <numeric>
@@ -664,32 +664,6 @@ bool segments_cross(const Point2& a, const Point2& b, const Point2& c, const Poi
     return orientation(s, o1, o2) == 0 && (o1 - s).dot(o2 - s) > 0;
   }
   return CGAL::do_intersect(K::Segment_2(cp(a), cp(b)), K::Segment_2(cp(c), cp(d)));
-}
-
-// Nesting level of every face of a constrained triangulation: 0 for the infinite face, one
-// more across each edge for which crosses(a, b) holds (a, b: the edge's finite vertices).
-// Odd levels are inside the domain, even levels above 0 inside its holes.
-template <class Tr, class Crosses>
-std::unordered_map<typename Tr::Face_handle, int> nesting_levels(const Tr& t, Crosses crosses) {
-  std::unordered_map<typename Tr::Face_handle, int> level;
-  std::deque<std::pair<typename Tr::Face_handle, int>> queue{{t.infinite_face(), 0}};
-  level[t.infinite_face()] = 0;
-  while (!queue.empty()) {
-    auto [f, l] = queue.front();
-    queue.pop_front();
-    for (int k = 0; k < 3; ++k) {
-      auto g = f->neighbor(k);
-      if (level.count(g)) continue;
-      auto va = f->vertex(Tr::cw(k)), vb = f->vertex(Tr::ccw(k));
-      const bool across = !t.is_infinite(va) && !t.is_infinite(vb) && f->is_constrained(k) && crosses(va, vb);
-      level[g] = across ? l + 1 : l;
-      if (across)
-        queue.push_back({g, l + 1});
-      else
-        queue.push_front({g, l});
-    }
-  }
-  return level;
 }
 
 }  // namespace

@@ -6,6 +6,8 @@
 #include <tbs/errors.h>
 #include <tbs/parameterize.h>
 
+#include "nesting_levels.h"
+
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
 #include <CGAL/AABB_triangle_primitive.h>
@@ -512,35 +514,12 @@ std::vector<std::vector<int>> fill_holes(Mesh3& ext, std::vector<P2>& uv, const 
       vh.back()->info() = v;
     }
     for (size_t i = 0; i < L; ++i) cdt.insert_constraint(vh[i], vh[(i + 1) % L]);
-    // Inside the polygon: the faces reached from the infinite face by crossing one constraint.
-    std::map<HoleCdt::Face_handle, int> level{{cdt.infinite_face(), 0}};
-    std::vector<HoleCdt::Face_handle> stack{cdt.infinite_face()}, across;
-    for (int lv = 0; lv < 2 && !stack.empty(); ++lv) {
-      while (!stack.empty()) {
-        const auto f = stack.back();
-        stack.pop_back();
-        for (int i = 0; i < 3; ++i) {
-          const auto g = f->neighbor(i);
-          if (level.count(g)) continue;
-          if (cdt.is_constrained({f, i})) {
-            across.push_back(g);
-          } else {
-            level[g] = lv;
-            stack.push_back(g);
-          }
-        }
-      }
-      for (const auto& g : across)
-        if (!level.count(g)) level[g] = lv + 1, stack.push_back(g);
-      across.clear();
-    }
+    // Inside the polygon: level 1 (every constraint is an edge of the loop).
+    const auto level = detail::nesting_levels(cdt, [](HoleCdt::Vertex_handle, HoleCdt::Vertex_handle) { return true; });
     std::vector<Tri> fill;
     bool simple = cdt.number_of_vertices() == L;  // no two loop vertices at one (u, v)
-    for (auto f = cdt.finite_faces_begin(); simple && f != cdt.finite_faces_end(); ++f) {
-      const auto it = level.find(f);
-      if (it == level.end()) simple = false;
-      else if (it->second == 1) fill.push_back({f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()});
-    }
+    for (auto f = cdt.finite_faces_begin(); simple && f != cdt.finite_faces_end(); ++f)
+      if (level.at(f) == 1) fill.push_back({f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()});
     if (simple && fill.size() + 2 == L)
       ext.faces.insert(ext.faces.end(), fill.begin(), fill.end());
     else
@@ -615,9 +594,9 @@ std::vector<P2> relax_areas(const Mesh3& m, const std::vector<P2>& start, const 
     }
     return e;
   };
-  auto to_uv = [&](const Vec& x) {
-    std::vector<P2> r(m.points.size());
-    for (size_t v = 0; v < r.size(); ++v) r[v] = P2(x[2 * v], x[2 * v + 1]);
+  auto to_uv = [](const Vec& x, size_t count) {
+    std::vector<P2> r(count);
+    for (size_t v = 0; v < count; ++v) r[v] = P2(x[2 * v], x[2 * v + 1]);
     return r;
   };
   Vec x(2 * nv);
@@ -706,9 +685,7 @@ std::vector<P2> relax_areas(const Mesh3& m, const std::vector<P2>& start, const 
       const Vec y = x + t * dir;
       const double ey = energy(y);
       if (!(ey < e)) continue;
-      std::vector<P2> all(nv);
-      for (int v = 0; v < nv; ++v) all[v] = P2(y[2 * v], y[2 * v + 1]);
-      if (!find_folds(ext, all, open).ok()) continue;
+      if (!find_folds(ext, to_uv(y, ext.points.size()), open).ok()) continue;
       gain = (e - ey) / e;
       x = y, e = ey, moved = true;
       ++taken;
@@ -716,7 +693,7 @@ std::vector<P2> relax_areas(const Mesh3& m, const std::vector<P2>& start, const 
     if (!moved || gain < kStall) break;
   }
   if (say) say("relaxed toward equal areas in " + plural(static_cast<size_t>(taken), "step", "steps"));
-  return to_uv(x);
+  return to_uv(x, m.points.size());
 }
 
 // Scales the parameters to the surface's area, turns them to their principal axes (a rotation,
