@@ -28,6 +28,7 @@ class BoxGrid {
     if (extent_.empty()) {
       start_.assign(2, 0);
       items_.clear();
+      cells_.assign(boxes.size(), Cells{});
       return;
     }
     const Point2 ext = extent_.max - extent_.min;
@@ -46,13 +47,31 @@ class BoxGrid {
       for (long y = y0; y <= y1; ++y)
         for (long x = x0; x <= x1; ++x) f(static_cast<size_t>(y * nx_ + x));
     };
-    for (const auto& b : boxes)
-      if (!b.empty()) each_cell(b, [&](size_t c) { ++count[c + 1]; });
+    cells_.assign(boxes.size(), Cells{});
+    for (size_t i = 0; i < boxes.size(); ++i)
+      if (!boxes[i].empty()) {
+        const Box2& b = boxes[i];
+        cells_[i] = {cx(b.min.x()), cx(b.max.x()), cy(b.min.y()), cy(b.max.y())};
+        each_cell(b, [&](size_t c) { ++count[c + 1]; });
+      }
     for (size_t c = 1; c < count.size(); ++c) count[c] += count[c - 1];
     start_ = count;
     items_.assign(static_cast<size_t>(count.back()), -1);
     for (int i = 0; i < static_cast<int>(boxes.size()); ++i)
       if (!boxes[i].empty()) each_cell(boxes[i], [&](size_t c) { items_[count[c]++] = i; });
+  }
+
+  // Whether box `id` may grow or shrink to b without a new build: b lies inside the grid's
+  // extent and meets no cell that the build did not list `id` in. A grid whose cells list a box
+  // in more cells than it meets answers at() with the same boxes in the same order (by id)
+  // among those that contain the point, which is all its users look at.
+  bool covers(int id, const Box2& b) const {
+    if (b.empty() || static_cast<size_t>(id) >= cells_.size() || cells_[id].x0 < 0) return false;
+    if (!(b.min.x() >= extent_.min.x() && b.max.x() <= extent_.max.x() && b.min.y() >= extent_.min.y() &&
+          b.max.y() <= extent_.max.y()))
+      return false;
+    const Cells& c = cells_[id];
+    return cx(b.min.x()) >= c.x0 && cx(b.max.x()) <= c.x1 && cy(b.min.y()) >= c.y0 && cy(b.max.y()) <= c.y1;
   }
 
   // Boxes whose cell contains p (empty if p is outside the grid).
@@ -117,7 +136,13 @@ class BoxGrid {
     return static_cast<long>(f);
   }
 
+  // The cells a box was listed in (x0 < 0: none, an empty box).
+  struct Cells {
+    long x0 = -1, x1 = -1, y0 = -1, y1 = -1;
+  };
+
   Box2 extent_;
+  std::vector<Cells> cells_;
   long nx_ = 1, ny_ = 1;
   double sx_ = 1, sy_ = 1;
   std::vector<int> start_;

@@ -163,15 +163,22 @@ struct Evaluator::Impl {
     }
   }
 
+  // The box of triangle t, and the box of its basis functions' supports: the knots of levels
+  // 0 .. n-1 of its vertices (those of the degree n-1 form's knot sets).
+  void triangle_boxes(int t) {
+    const Domain& d = s->domain();
+    tri_box[t] = support[t] = Box2{};
+    for (int v : d.triangle(t)) {
+      tri_box[t].extend(d.vertex(v));
+      for (int l = 0; l < n; ++l) support[t].extend(s->knot(v, l));
+    }
+  }
+
   void rebuild_grids() {
     const Domain& d = s->domain();
-    tri_box.assign(d.triangle_count(), Box2{});
-    support.assign(d.triangle_count(), Box2{});
-    for (int t = 0; t < d.triangle_count(); ++t)
-      for (int v : d.triangle(t)) {
-        tri_box[t].extend(d.vertex(v));
-        for (int l = 0; l < n; ++l) support[t].extend(s->knot(v, l));
-      }
+    tri_box.resize(d.triangle_count());
+    support.resize(d.triangle_count());
+    for (int t = 0; t < d.triangle_count(); ++t) triangle_boxes(t);
     tri_grid.build(tri_box, static_cast<size_t>(d.triangle_count()));
     support_grid.build(support, static_cast<size_t>(d.triangle_count()));
   }
@@ -570,8 +577,17 @@ void Evaluator::update_knots(int vertex) {
     m.build();
     return;
   }
-  for (int t : m.s->domain().vertex_triangles(vertex)) m.refresh_triangle(t);
-  m.rebuild_grids();
+  // Only the boxes of the triangles around the vertex change; the grids are built again only
+  // when one of them reaches a cell its grid did not list it in (a grid that lists a triangle
+  // in more cells gives the same answers).
+  const Domain& d = m.s->domain();
+  bool rebuild = false;
+  for (int t : d.vertex_triangles(vertex)) {
+    m.refresh_triangle(t);
+    m.triangle_boxes(t);
+    rebuild = rebuild || !m.tri_grid.covers(t, m.tri_box[t]) || !m.support_grid.covers(t, m.support[t]);
+  }
+  if (rebuild) m.rebuild_grids();
 }
 
 size_t Evaluator::node_count() const { return impl_->nodes.size(); }

@@ -5,6 +5,7 @@
 #include <tbs/tolerances.h>
 
 #include <Eigen/Dense>
+#include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -27,16 +28,25 @@ double tri_area(const Domain& d, int t) {
 
 namespace {
 
+// Points per task when a local energy computes its basis rows in parallel.
+constexpr Eigen::Index kRowsPerTask = 32;
+
 // The energy a choice of knots for s allows (variable projection, restricted to the star): the
 // knots of s enter only the basis functions of the triangles around s, so their control points
 // are solved again by least squares on the local points, the others held as they are, and the
 // energy is judged with that solution. Without it a knot move is judged with control points
 // fitted to the old knots, and nearly every move looks worse than it is.
+//
+// The basis rows of the local points are most of the cost. A point's row changes with the knots
+// of s only through the star's basis functions, and those are zero outside their supports (the
+// boxes of their knots, as the evaluator bounds them): the rows of points outside the star's
+// supports, before and after a move, are kept from the accepted knots, the same numbers the
+// evaluator would give again.
 class LocalResolve {
  public:
   LocalResolve(const Spline& spline, std::span<const int> star, const FitPoints& pts, std::span<const int> local,
-               double lambda)
-      : spline_(spline), pts_(pts), local_(local), lambda_(lambda) {
+               double lambda, bool keep_rows)
+      : spline_(spline), star_(star), pts_(pts), local_(local), lambda_(lambda), keep_rows_(keep_rows) {
     const int bc = beta_count(spline.degree());
     for (int t : star)
       for (int j = 0; j < bc; ++j) free_.push_back(spline.control_point_index(t, j));
@@ -58,53 +68,81 @@ class LocalResolve {
   }
 
   /// min over the star's control points of the data and fairness energy of the local points,
-  /// plus a small pull to the current control points (it keeps the solve definite).
+  /// plus a small pull to the current control points (it keeps the solve definite), for the
+  /// spline's current knots. The first call sets the accepted state; later calls start from
+  /// it (see accept()).
   double energy(const Evaluator& eval) {
     const auto q = static_cast<Eigen::Index>(local_.size()), m = static_cast<Eigen::Index>(free_.size());
-    a_.setZero(q, m);
-    du_.setZero(q, m);
-    dv_.setZero(q, m);
-    r_.resize(q, 3);
-    fu_.resize(q, 3);
-    fv_.resize(q, 3);
+    supports(now_.boxes);
+    if (accepted_.boxes.empty()) {
+      now_.a.setZero(q, m);
+      now_.du.setZero(q, m);
+      now_.dv.setZero(q, m);
+      now_.r.resize(q, 3);
+      now_.fu.resize(q, 3);
+      now_.fv.resize(q, 3);
+    } else {
+      now_.a = accepted_.a;
+      now_.du = accepted_.du;
+      now_.dv = accepted_.dv;
+      now_.r = accepted_.r;
+      now_.fu = accepted_.fu;
+      now_.fv = accepted_.fv;
+    }
     const auto& cp = spline_.control_points();
-    for (Eigen::Index i = 0; i < q; ++i) {
-      const int p = local_[i];
-      Eigen::Vector3d f = Eigen::Vector3d::Zero(), fu = f, fv = f;
-      if (eval.basis_row(pts_.uv[p], row_)) {
-        for (size_t k = 0; k < row_.index.size(); ++k) {
-          const auto it = std::lower_bound(free_.begin(), free_.end(), row_.index[k]);
-          if (it != free_.end() && *it == row_.index[k]) {
-            const auto j = it - free_.begin();
-            a_(i, j) = row_.value[k];
-            du_(i, j) = row_.du[k];
-            dv_(i, j) = row_.dv[k];
-          } else {
-            const Point3& c = cp[row_.index[k]];
-            f += row_.value[k] * c;
-            fu += row_.du[k] * c;
-            fv += row_.dv[k] * c;
+    // In parallel: each point fills its own rows of the matrices, so the result does not
+    // depend on the thread count. Isolated: a worker waiting here must not pick up another
+    // vertex's search, which would change this worker's copy of the spline under it
+    // (optimize_knots runs one search per worker copy).
+    auto fill = [&](const tbb::blocked_range<Eigen::Index>& range) {
+      thread_local BasisRow row;
+      for (Eigen::Index i = range.begin(); i != range.end(); ++i) {
+        const int p = local_[i];
+        if (keep_rows_ && !accepted_.boxes.empty() && !touched(pts_.uv[p])) continue;
+        now_.a.row(i).setZero();
+        now_.du.row(i).setZero();
+        now_.dv.row(i).setZero();
+        Eigen::Vector3d f = Eigen::Vector3d::Zero(), fu = f, fv = f;
+        if (eval.basis_row(pts_.uv[p], row)) {
+          for (size_t k = 0; k < row.index.size(); ++k) {
+            const auto it = std::lower_bound(free_.begin(), free_.end(), row.index[k]);
+            if (it != free_.end() && *it == row.index[k]) {
+              const auto j = it - free_.begin();
+              now_.a(i, j) = row.value[k];
+              now_.du(i, j) = row.du[k];
+              now_.dv(i, j) = row.dv[k];
+            } else {
+              const Point3& c = cp[row.index[k]];
+              f += row.value[k] * c;
+              fu += row.du[k] * c;
+              fv += row.dv[k] * c;
+            }
           }
         }
+        now_.r.row(i) = (pts_.p[p] - f).transpose();
+        if (!pts_.weight.empty()) {  // guides: rows scaled by the square root of their weight
+          const double s = std::sqrt(pts_.weight[p]);
+          now_.a.row(i) *= s;
+          now_.r.row(i) *= s;
+        }
+        now_.fu.row(i) = fu.transpose();
+        now_.fv.row(i) = fv.transpose();
       }
-      r_.row(i) = (pts_.p[p] - f).transpose();
-      if (!pts_.weight.empty()) {  // guides: rows scaled by the square root of their weight
-        const double s = std::sqrt(pts_.weight[p]);
-        a_.row(i) *= s;
-        r_.row(i) *= s;
-      }
-      fu_.row(i) = fu.transpose();
-      fv_.row(i) = fv.transpose();
-    }
-    g_.noalias() = a_.transpose() * a_;
+    };
+    tbb::this_task_arena::isolate(
+        [&] { tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, q, kRowsPerTask), fill); });
+    const Rows& w = now_;
+    g_.noalias() = w.a.transpose() * w.a;
     const double mu = 1e-6 * std::max(g_.trace() / static_cast<double>(m), 1e-300);
     g_.diagonal().array() += mu;
-    x_ = g_.llt().solve(a_.transpose() * r_ + mu * c_);
+    x_ = g_.llt().solve(w.a.transpose() * w.r + mu * c_);
     const Eigen::MatrixXd& x = x_;
-    double e = ((r_ - a_ * x).rowwise().squaredNorm()).sum() + mu * (x - c_).squaredNorm();
+    double e = ((w.r - w.a * x).rowwise().squaredNorm()).sum() + mu * (x - c_).squaredNorm();
     if (lambda_ > 0) {
-      fu_.noalias() += du_ * x;
-      fv_.noalias() += dv_ * x;
+      fu_ = w.fu;
+      fv_ = w.fv;
+      fu_.noalias() += w.du * x;
+      fv_.noalias() += w.dv * x;
       for (Eigen::Index i = 0; i < q; ++i) {
         const int p = local_[i];
         const Eigen::Vector3d n(pts_.n[p].x(), pts_.n[p].y(), pts_.n[p].z());
@@ -112,8 +150,12 @@ class LocalResolve {
         e += lambda_ * pts_.fair_weight(p) * (a * a + b * b);
       }
     }
+    if (accepted_.boxes.empty()) accept();
     return e;
   }
+
+  /// The knots of the last energy() call are kept: later calls start from its rows.
+  void accept() { std::swap(accepted_, now_); }
 
   /// The control points of the last energy() call's solution.
   std::vector<std::pair<int, Point3>> solution() const {
@@ -124,13 +166,41 @@ class LocalResolve {
   }
 
  private:
+  // The local points' rows over the free control points (a, du, dv), and the rest of each
+  // point's row applied to the held control points (r = p - F of the rest, fu, fv), for one
+  // choice of knots, with the supports of the star's basis functions for those knots.
+  struct Rows {
+    Eigen::MatrixXd a, du, dv, r, fu, fv;
+    std::vector<Box2> boxes;
+  };
+
+  // The box the evaluator bounds each star triangle's basis functions by (its support-grid
+  // box): the knots of levels 0 .. n-1 of the triangle's vertices.
+  void supports(std::vector<Box2>& boxes) const {
+    const int n = spline_.degree();
+    boxes.assign(star_.size(), Box2{});
+    for (size_t k = 0; k < star_.size(); ++k)
+      for (int v : spline_.domain().triangle(star_[k]))
+        for (int l = 0; l < n; ++l) boxes[k].extend(spline_.knot(v, l));
+  }
+
+  // Whether the star's basis functions may be non-zero at u for the accepted or the current knots.
+  bool touched(const Point2& u) const {
+    for (const auto* b : {&accepted_.boxes, &now_.boxes})
+      for (const Box2& box : *b)
+        if (box.contains(u)) return true;
+    return false;
+  }
+
   const Spline& spline_;
+  std::span<const int> star_;
   const FitPoints& pts_;
   std::span<const int> local_;
   double lambda_;
+  bool keep_rows_;
   std::vector<int> free_;
-  Eigen::MatrixXd c_, a_, du_, dv_, r_, fu_, fv_, g_, x_;
-  BasisRow row_;
+  Rows accepted_, now_;
+  Eigen::MatrixXd c_, fu_, fv_, g_, x_;
 };
 
 struct VertexResult {
@@ -143,7 +213,7 @@ struct VertexResult {
 // OptimizeKnot(t_s) on one spline copy: pattern search, accepting only improvements.
 VertexResult optimize_vertex(Spline& spline, Evaluator& eval, int s, std::vector<int>& located,
                              std::vector<std::vector<int>>& tri_points, const FitPoints& pts,
-                             double lambda) {
+                             double lambda, bool keep_rows) {
   const Domain& d = spline.domain();
   const int n = spline.degree();
   VertexResult res;
@@ -168,7 +238,7 @@ VertexResult optimize_vertex(Spline& spline, Evaluator& eval, int s, std::vector
     local.resize(w);
   }
   // Knots are moved only where the points decide the star's control points.
-  LocalResolve resolve(spline, star, pts, local, lambda);
+  LocalResolve resolve(spline, star, pts, local, lambda, keep_rows);
   size_t star_points = 0, fewest = std::numeric_limits<size_t>::max();
   for (int t : star) star_points += tri_points[t].size(), fewest = std::min(fewest, tri_points[t].size());
   if (!resolve.determined(star_points, fewest)) return res;
@@ -208,6 +278,7 @@ VertexResult optimize_vertex(Spline& spline, Evaluator& eval, int s, std::vector
     }
     if (ok && e < energy * (1 - 1e-9)) {
       energy = e;
+      resolve.accept();
       res.control_points = resolve.solution();
       res.moved = true;
       return true;
@@ -301,7 +372,7 @@ std::vector<std::vector<int>> colour_classes(const Domain& d, std::span<const in
 KnotSweepStats optimize_knots(Spline& spline, Evaluator& eval, std::vector<int>& located,
                               const FitPoints& pts, double lambda, std::span<const int> vertices,
                               const std::function<void(int, const Point2&)>& on_primary_move,
-                              int threads) {
+                              int threads, bool keep_rows) {
   const Domain& d = spline.domain();
   const int n = spline.degree();
   KnotSweepStats stats;
@@ -353,22 +424,22 @@ KnotSweepStats optimize_knots(Spline& spline, Evaluator& eval, std::vector<int>&
       }
       sync(*w.spline, w.eval.get(), w.synced, log_size);
       w.synced = log_size;
-      results[q] = optimize_vertex(*w.spline, *w.eval, cls[q], located, tri_points, pts, lambda);
+      results[q] = optimize_vertex(*w.spline, *w.eval, cls[q], located, tri_points, pts, lambda, keep_rows);
       // Keep the copy equal to the class-start state for the other vertices of the class it
       // may still run: the vertex's own change is replayed from the log later (idempotent).
     };
-    if (cls.size() == 1) {
-      body(0);
-    } else {
-      auto loop = [&] {
+    // In the arena even for one vertex: its local energies run their rows in parallel.
+    auto loop = [&] {
+      if (cls.size() == 1)
+        body(0);
+      else
         tbb::parallel_for(size_t{0}, cls.size(), body);
-      };
-      if (threads > 0) {
-        tbb::task_arena arena(threads);
-        arena.execute(loop);
-      } else {
-        loop();
-      }
+    };
+    if (threads > 0) {
+      tbb::task_arena arena(threads);
+      arena.execute(loop);
+    } else {
+      loop();
     }
     for (size_t q = 0; q < cls.size(); ++q) {
       const VertexResult& r = results[q];

@@ -29,10 +29,12 @@ struct KnotSweepStats {
 /// triangle flips or collapses), sub-knots within Traas's radius r of the primary knot,
 /// boundary sub-knots outside the domain; boundary primary knots and the knots of feature
 /// vertices stay fixed. `located` is updated for points whose triangle changes;
-/// `on_primary_move(v, p)` reports primary knot moves.
+/// `on_primary_move(v, p)` reports primary knot moves. `keep_rows` (for tests): a candidate
+/// move computes again only the basis rows of points its basis functions may reach; false
+/// computes every local point's row for every candidate (the same result, slower).
 KnotSweepStats optimize_knots(Spline& spline, Evaluator& eval, std::vector<int>& located,
                               const FitPoints& pts, double lambda, std::span<const int> vertices,
                               const std::function<void(int, const Point2&)>& on_primary_move,
-                              int threads);
+                              int threads, bool keep_rows = true);
 
 }  // namespace tbs::detail

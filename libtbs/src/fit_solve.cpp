@@ -256,14 +256,7 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
       std::sort(S.begin(), S.end());
     });
   });
-  // Pattern: rows j -> sorted columns k >= j.
-  std::vector<std::vector<int>> rows(N);
-  for (int t = 0; t < T; ++t) {
-    const auto& S = support[t];
-    for (size_t a = 0; a < S.size(); ++a)
-      rows[S[a]].insert(rows[S[a]].end(), S.begin() + static_cast<long>(a), S.end());
-  }
-  // Control-net membrane pairs.
+  // Control-net membrane pairs (j < k).
   std::vector<std::pair<int, int>> net;
   {
     const int n = spline.degree();
@@ -281,15 +274,48 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
             if (j < k) net.emplace_back(j, k);
           }
       }
-    for (auto [j, k] : net) rows[j].push_back(k), rows[j].push_back(j), rows[k].push_back(k);
   }
+  // Pattern: row j holds the sorted columns k >= j that a triangle's support set (k after j
+  // in it) or a membrane pair joins to j, and j itself. Rows are independent: built in
+  // parallel from the triangles and pairs of each control point.
+  // Items grouped by control point (a counting sort); each(f) calls f(j, item) for every item.
+  auto by_point = [N]<class Item>(Item, auto&& each) {
+    std::vector<size_t> start(static_cast<size_t>(N) + 1, 0);
+    each([&](int j, const Item&) { ++start[j + 1]; });
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    std::vector<Item> items(start.back());
+    std::vector<size_t> next(start.begin(), start.end() - 1);
+    each([&](int j, const Item& item) { items[next[j]++] = item; });
+    return std::pair{std::move(start), std::move(items)};
+  };
+  // (triangle, position of j in its support set) and the membrane partners k > j of each j.
+  const auto [tri_start, tri_items] = by_point(std::pair<int, int>{}, [&](auto&& f) {
+    for (int t = 0; t < T; ++t)
+      for (size_t a = 0; a < support[t].size(); ++a) f(support[t][a], std::pair{t, static_cast<int>(a)});
+  });
+  const auto [net_start, net_items] = by_point(0, [&](auto&& f) {
+    for (auto [j, k] : net) f(j, k);
+  });
+  std::vector<std::vector<int>> rows(N);
+  run(threads, [&] {
+    tbb::parallel_for(0, N, [&](int j) {
+      Scratch& sc = scratch.local();
+      std::vector<int>& r = rows[j];
+      auto add = [&](int k) {
+        if (sc.where[k] < 0) sc.where[k] = 0, r.push_back(k);
+      };
+      add(j);
+      for (size_t e = tri_start[j]; e < tri_start[j + 1]; ++e) {
+        const auto [t, from] = tri_items[e];
+        for (size_t a = static_cast<size_t>(from); a < support[t].size(); ++a) add(support[t][a]);
+      }
+      for (size_t e = net_start[j]; e < net_start[j + 1]; ++e) add(net_items[e]);
+      for (int k : r) sc.where[k] = -1;
+      std::sort(r.begin(), r.end());
+    });
+  });
   std::vector<size_t> row_start(static_cast<size_t>(N) + 1, 0);
-  for (int j = 0; j < N; ++j) {
-    rows[j].push_back(j);
-    std::sort(rows[j].begin(), rows[j].end());
-    rows[j].erase(std::unique(rows[j].begin(), rows[j].end()), rows[j].end());
-    row_start[j + 1] = row_start[j] + rows[j].size();
-  }
+  for (int j = 0; j < N; ++j) row_start[j + 1] = row_start[j] + rows[j].size();
   const size_t nnz = row_start[N];
   std::vector<int> cols(nnz);
   for (int j = 0; j < N; ++j) std::copy(rows[j].begin(), rows[j].end(), cols.begin() + static_cast<long>(row_start[j]));
@@ -492,38 +518,46 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
       throw SolverError("the control-point system could not be factorised (" + std::to_string(S.rows()) +
                         " unknowns); the data may be degenerate");
   };
-  // The coupled 3N x 3N lower triangle, column-major: column 3j+a holds rows 3k+b for k >= j.
+  // The coupled 3N x 3N lower triangle, column-major: column 3j+a holds rows 3k+b for k >= j
+  // (b >= a on the diagonal block). Row j's first column is j itself, so column 3j+a has
+  // 3 len(j) - a entries; the columns are filled in parallel, in place.
   auto coupled = [&] {
-    std::vector<int> outer(static_cast<size_t>(n3) + 1, 0), inner;
-    std::vector<double> values;
-    inner.reserve(nnz * 9 / 2 + 3 * N);
-    values.reserve(inner.capacity());
-    static constexpr int kSym[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+    Eigen::SparseMatrix<double> M(n3, n3);
+    int* outer = M.outerIndexPtr();
+    outer[0] = 0;
     for (int j = 0; j < N; ++j)
-      for (int a = 0; a < 3; ++a) {
-        for (size_t pos = row_start[j]; pos < row_start[j + 1]; ++pos) {
-          const int k = cols[pos];
-          for (int c = (k == j ? a : 0); c < 3; ++c) {
-            double v = (a == c ? G[pos] : 0.0);
-            if (fair) v += lambda * F[kSym[a][c]][pos];
-            inner.push_back(3 * k + c);
-            values.push_back(v);
+      for (int a = 0; a < 3; ++a)
+        outer[3 * j + a + 1] = outer[3 * j + a] + 3 * static_cast<int>(row_start[j + 1] - row_start[j]) - a;
+    M.resizeNonZeros(outer[n3]);
+    int* inner = M.innerIndexPtr();
+    double* values = M.valuePtr();
+    static constexpr int kSym[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+    run(threads, [&] {
+      tbb::parallel_for(0, N, [&](int j) {
+        for (int a = 0; a < 3; ++a) {
+          size_t out = static_cast<size_t>(outer[3 * j + a]);
+          for (size_t pos = row_start[j]; pos < row_start[j + 1]; ++pos) {
+            const int k = cols[pos];
+            for (int c = (k == j ? a : 0); c < 3; ++c) {
+              double v = (a == c ? G[pos] : 0.0);
+              if (fair) v += lambda * F[kSym[a][c]][pos];
+              inner[out] = 3 * k + c;
+              values[out++] = v;
+            }
           }
         }
-        outer[3 * j + a + 1] = static_cast<int>(inner.size());
-      }
-    return Eigen::SparseMatrix<double>(Eigen::Map<const Eigen::SparseMatrix<double>>(
-        n3, n3, static_cast<long>(inner.size()), outer.data(), inner.data(), values.data()));
+      });
+    });
+    return M;
   };
   Eigen::VectorXd x;
   if (solver == Solver::Split) {
-    std::vector<int> outer(static_cast<size_t>(N) + 1), inner(cols.begin(), cols.end());
-    std::vector<double> values(nnz);
-    for (int j = 0; j <= N; ++j) outer[j] = static_cast<int>(row_start[j]);
+    Eigen::SparseMatrix<double> S(N, N);  // filled in place: the pattern, then the values
+    for (int j = 0; j <= N; ++j) S.outerIndexPtr()[j] = static_cast<int>(row_start[j]);
+    S.resizeNonZeros(static_cast<Eigen::Index>(nnz));
+    std::copy(cols.begin(), cols.end(), S.innerIndexPtr());
     for (size_t pos = 0; pos < nnz; ++pos)
-      values[pos] = G[pos] + (fair ? 0.5 * lambda * (F[0][pos] + F[3][pos] + F[5][pos]) : 0.0);
-    const Eigen::SparseMatrix<double> S = Eigen::Map<const Eigen::SparseMatrix<double>>(
-        N, N, static_cast<long>(nnz), outer.data(), inner.data(), values.data());
+      S.valuePtr()[pos] = G[pos] + (fair ? 0.5 * lambda * (F[0][pos] + F[3][pos] + F[5][pos]) : 0.0);
     const Eigen::SparseMatrix<double> M = fair ? coupled() : Eigen::SparseMatrix<double>();
     if (times) {
       times->assembly += since(t_stage);

@@ -2,6 +2,7 @@
 #include <tbs/evaluator.h>
 #include <tbs/reference.h>
 
+#include "box_grid.h"
 #include "random_spline.h"
 
 #include <gtest/gtest.h>
@@ -241,6 +242,104 @@ TEST(Evaluator, UpdateKnotsEqualsAFreshEvaluator) {
     if (fresh.locate(u) < 0) continue;
     EXPECT_LT((ev.value(u) - fresh.value(u)).norm(), 1e-14);
   }
+}
+
+// update_knots rebuilds its spatial grids only when a moved triangle reaches a cell its grid
+// did not list it in. Through a walk of knot moves, small (kept grids) and large (new grids),
+// and back, points are located in the same triangles as by a fresh evaluator, and their basis
+// rows have the same entries with the same values to rounding (the graph of the updated
+// evaluator keeps the split sets it chose for the first knots).
+TEST(Evaluator, UpdateKnotsKeepsTheRowsOfAFreshEvaluator) {
+  Spline s = test::random_spline(3, grid(), 23);
+  Evaluator ev(s);
+  const auto pts = test::random_domain_points(s.domain(), 400, 9);
+  std::vector<int> inner;
+  for (int i = 0; i < s.domain().vertex_count(); ++i)
+    if (!s.domain().is_boundary_vertex(i)) inner.push_back(i);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const std::vector<Point2> start = s.knots();
+  BasisRow a, b;
+  for (int step = 0; step < 40; ++step) {
+    SCOPED_TRACE(step);
+    const int v = inner[static_cast<size_t>(step) % inner.size()];
+    const double reach = step % 5 == 4 ? 0.06 : 0.004;  // every fifth move crosses grid cells
+    for (int l = 3; l >= 0; --l) {
+      const Point2 p = s.knot(v, l) + reach * Point2(unit(rng), unit(rng));
+      try {
+        s.set_knot(v, l, p);
+      } catch (const InvalidInput&) {  // a primary move that would flip a triangle: skip it
+      }
+    }
+    if (step == 30) {  // back to the start, vertex by vertex
+      for (int w = 0; w < s.domain().vertex_count(); ++w)
+        for (int l = 3; l >= 0; --l) s.set_knot(w, l, start[static_cast<size_t>(w) * 4 + l]);
+      for (int w = 0; w < s.domain().vertex_count(); ++w) ev.update_knots(w);
+    } else {
+      ev.update_knots(v);
+    }
+    const Evaluator fresh(s);
+    for (const auto& u : pts) {
+      ASSERT_EQ(ev.locate(u), fresh.locate(u));
+      ASSERT_EQ(ev.basis_row(u, a), fresh.basis_row(u, b));
+      ASSERT_EQ(a.index, b.index);
+      for (size_t k = 0; k < a.index.size(); ++k) {
+        ASSERT_NEAR(a.value[k], b.value[k], 1e-13);
+        ASSERT_NEAR(a.du[k], b.du[k], 1e-11);
+        ASSERT_NEAR(a.dv[k], b.dv[k], 1e-11);
+      }
+    }
+  }
+}
+
+// The exactness behind update_knots' kept grids: while covers() allows a box to change without
+// a new build, the grid answers a point with the same boxes, in the same order, as a grid
+// built fresh, once both lists are cut to the boxes that contain the point.
+TEST(BoxGrid, CoveredChangesAnswerLikeAFreshGrid) {
+  std::mt19937_64 rng(41);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  auto box_at = [](const Point2& c, double rx, double ry) {
+    Box2 b;
+    b.extend(c - Point2(rx, ry));
+    b.extend(c + Point2(rx, ry));
+    return b;
+  };
+  std::vector<Box2> boxes;
+  for (int i = 0; i < 300; ++i)
+    boxes.push_back(box_at(Point2(unit(rng), unit(rng)), 0.01 + 0.05 * unit(rng), 0.01 + 0.05 * unit(rng)));
+  detail::BoxGrid kept, fresh;
+  kept.build(boxes, boxes.size());
+  int covered = 0, rebuilt = 0;
+  auto inside = [](const detail::BoxGrid& g, const std::vector<Box2>& b, const Point2& p) {
+    std::vector<int> ids;
+    for (int id : g.at(p))
+      if (b[id].contains(p)) ids.push_back(id);
+    return ids;
+  };
+  for (int step = 0; step < 600; ++step) {
+    const int id = static_cast<int>(rng() % boxes.size());
+    const Point2 c = 0.5 * (boxes[id].min + boxes[id].max);
+    const double jump = step % 4 == 3 ? 0.1 : 0.005;
+    const Box2 b = box_at(c + jump * Point2(unit(rng) - 0.5, unit(rng) - 0.5), 0.01 + 0.05 * unit(rng),
+                          0.01 + 0.05 * unit(rng));
+    const bool keep = kept.covers(id, b);
+    boxes[id] = b;
+    if (keep) {
+      ++covered;
+    } else {
+      kept.build(boxes, boxes.size());
+      ++rebuilt;
+    }
+    fresh.build(boxes, boxes.size());
+    for (int k = 0; k < 40; ++k) {
+      const Point2 p(unit(rng) * 1.1 - 0.05, unit(rng) * 1.1 - 0.05);
+      ASSERT_EQ(inside(kept, boxes, p), inside(fresh, boxes, p)) << "step " << step;
+    }
+    // A point on a box's corner is inside it (closed boxes) and must be found.
+    ASSERT_EQ(inside(kept, boxes, b.max), inside(fresh, boxes, b.max)) << "step " << step;
+  }
+  EXPECT_GT(covered, 100);
+  EXPECT_GT(rebuilt, 100);
 }
 
 TEST(Evaluator, ControlPointsAreReadAtEachCall) {

@@ -8,6 +8,7 @@
 #include <tbs/scan.h>
 
 #include "cgal_demo_data.h"
+#include "fit_knots.h"
 #include "fit_solve.h"
 
 #include <Eigen/Eigenvalues>
@@ -891,6 +892,42 @@ TEST(FitSolve, KeptBasisRowsChangeNothing) {
     EXPECT_EQ(solve(0), all);
     EXPECT_EQ(solve(1), all);          // every triangle's rows over the limit
     EXPECT_EQ(solve(64 << 10), all);   // the first triangles' rows kept, the others not
+  }
+}
+
+// A knot sweep over every interior vertex of a fitted spline: computing again only the basis
+// rows a candidate move can change gives the same knots, control points and point triangles
+// as computing every row for every candidate, with one thread and with two.
+TEST(KnotSearch, KeptRowsAndThreadCountChangeNothing) {
+  const SolveCase c = solve_case();
+  const detail::FitPoints pts = c.points();
+  const Domain& d = c.fit.spline.domain();
+  std::vector<int> vertices;
+  for (int v = 0; v < d.vertex_count(); ++v)
+    if (!d.is_boundary_vertex(v)) vertices.push_back(v);
+  struct Out {
+    std::vector<Point2> knots;
+    std::vector<Point3> control_points;
+    std::vector<int> located;
+    int moved = 0;
+  };
+  const auto sweep = [&](int threads, bool keep_rows) {
+    Spline s = c.fit.spline;
+    Evaluator eval(s);
+    std::vector<int> located = c.located;
+    const auto st = detail::optimize_knots(s, eval, located, pts, 1e-3, vertices, [](int, const Point2&) {}, threads,
+                                           keep_rows);
+    return Out{s.knots(), s.control_points(), located, st.moved};
+  };
+  const Out all = sweep(2, false);
+  EXPECT_GT(all.moved, 0);
+  for (const auto& [threads, keep_rows] : {std::pair{2, true}, std::pair{1, true}, std::pair{1, false}}) {
+    SCOPED_TRACE(testing::Message() << threads << " threads, keep_rows " << keep_rows);
+    const Out o = sweep(threads, keep_rows);
+    EXPECT_EQ(o.moved, all.moved);
+    EXPECT_EQ(o.knots, all.knots);
+    EXPECT_EQ(o.control_points, all.control_points);
+    EXPECT_EQ(o.located, all.located);
   }
 }
 

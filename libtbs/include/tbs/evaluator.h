@@ -102,7 +102,9 @@ class Evaluator {
                         int threads = 0) const;
 
   /// Re-reads the knots of `vertex` after Spline::set_knot(): recomputes only the graph nodes
-  /// whose knot sets contain one of them, and the spatial index.
+  /// whose knot sets contain one of them, and the boxes of the triangles around the vertex;
+  /// the spatial index is built again only when one of those boxes reaches a cell it was not
+  /// listed in (results are the same either way).
   /// Throws nothing but std::bad_alloc; vertex is not range-checked.
   void update_knots(int vertex);
 
