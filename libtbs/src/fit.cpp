@@ -368,6 +368,7 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
   std::vector<double> err(N, 0.0);
   std::vector<Point3> previous_cp;
   detail::SolveTimes solve_times;
+  detail::KeptRows kept_rows;  // basis rows one solve leaves to the next (the knot search's re-solves)
 
   for (int iter = 0;; ++iter) {
     Spline spline = Spline::with_canonical_map(n, fdom.domain(), knots);
@@ -441,7 +442,8 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
                             std::to_string(spline.control_point_count()) + " control points",
                0);
       spline.control_points() =
-          detail::solve_control_points(spline, eval, make_points(), lambda, opt.threads, &solve_times);
+          detail::solve_control_points(spline, eval, make_points(), lambda, opt.threads, &solve_times,
+                                       detail::Solver::Split, detail::kRowCacheBytes, &kept_rows);
       stage["solve"] += seconds_since(ts);
     };
     solve();

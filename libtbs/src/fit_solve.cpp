@@ -11,6 +11,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -174,10 +175,68 @@ void run(int threads, F&& f) {
 
 }  // namespace
 
+struct KeptRows::Data {
+  bool fair = false;
+  std::vector<std::array<int, 3>> triangles;  // the domain the rows were computed on
+  std::vector<Point2> knots;                  // and its knots
+  std::vector<int> order, start;              // the points of each triangle
+  std::vector<RowCache> cache;                // per triangle
+  std::vector<std::vector<int>> point_support;  // per triangle: the control points its points' rows touch
+
+  // Per triangle of the current solve: whether its kept rows are still its rows. They are if
+  // the domain is the same, the triangle holds the same points, and no knot moved in a
+  // triangle whose box (old and new knots of its vertices, all levels) meets the triangle's
+  // box: a point's row depends only on the knots of the triangles whose supports reach it.
+  std::vector<char> reusable(const Spline& spline, const FitPoints& pts, bool fair_now) const {
+    const Domain& d = spline.domain();
+    const int T = d.triangle_count();
+    std::vector<char> ok(T, 0);
+    if (fair != fair_now || static_cast<int>(triangles.size()) != T || knots.size() != spline.knots().size())
+      return ok;
+    for (int t = 0; t < T; ++t)
+      if (d.triangle(t) != triangles[t]) return ok;
+    const int stride = spline.degree() + 1;
+    std::vector<Box2> moved;
+    std::vector<char> changed(d.vertex_count(), 0);
+    for (int v = 0; v < d.vertex_count(); ++v)
+      for (int l = 0; l < stride; ++l)
+        if (spline.knot(v, l) != knots[static_cast<size_t>(v) * stride + l]) changed[v] = 1;
+    for (int v = 0; v < d.vertex_count(); ++v) {
+      if (!changed[v]) continue;
+      for (int t : d.vertex_triangles(v)) {
+        Box2 b;
+        for (int w : d.triangle(t))
+          for (int l = 0; l < stride; ++l) {
+            b.extend(spline.knot(w, l));
+            b.extend(knots[static_cast<size_t>(w) * stride + l]);
+          }
+        moved.push_back(b);
+      }
+    }
+    auto meets = [](const Box2& a, const Box2& b) {
+      return a.min.x() <= b.max.x() && b.min.x() <= a.max.x() && a.min.y() <= b.max.y() && b.min.y() <= a.max.y();
+    };
+    for (int t = 0; t < T; ++t) {
+      if (!cache[t].filled) continue;
+      const int m = pts.start[t + 1] - pts.start[t];
+      if (m != start[t + 1] - start[t] ||
+          !std::equal(pts.order.begin() + pts.start[t], pts.order.begin() + pts.start[t + 1], order.begin() + start[t]))
+        continue;
+      Box2 box;
+      for (int w : d.triangle(t)) box.extend(d.vertex(w));
+      ok[t] = std::none_of(moved.begin(), moved.end(), [&](const Box2& b) { return meets(b, box); });
+    }
+    return ok;
+  }
+};
+
+KeptRows::KeptRows() = default;
+KeptRows::~KeptRows() = default;
+
 std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& eval,
                                          const FitPoints& pts, double lambda, int threads,
                                          SolveTimes* times, Solver solver,
-                                         size_t row_cache_bytes) {
+                                         size_t row_cache_bytes, KeptRows* kept) {
   using Clock = std::chrono::steady_clock;
   auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
   auto t_stage = Clock::now();
@@ -211,49 +270,70 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
   // composite rule; where the points outnumber them they decide the shape, one rule will do.
   const int own = beta_count(spline.degree());
   auto bend_level = [&](int t) { return pts.start[t + 1] - pts.start[t] >= own ? 1 : kBendLevel; };
-  std::vector<std::vector<int>> support(T);
+  std::vector<std::vector<int>> support(T), point_support(T);
   // The pattern pass keeps its basis rows for the assembly pass, triangle by triangle, while
-  // they fit in row_cache_bytes (the rest are computed again); the same rows either way.
+  // they fit in row_cache_bytes (the rest are computed again); the same rows either way. With
+  // `kept`, triangles take the rows of the previous solve where they are still theirs.
   std::vector<RowCache> cache(T);
-  std::atomic<size_t> cached_bytes{0};
+  std::vector<char> reuse(T, 0);
+  if (kept && kept->data) reuse = kept->data->reusable(spline, pts, fair);
+  size_t reused_bytes = 0;
+  for (int t = 0; t < T; ++t)
+    if (reuse[t]) {
+      cache[t] = std::move(kept->data->cache[t]);
+      point_support[t] = std::move(kept->data->point_support[t]);
+      reused_bytes += cache[t].bytes();
+    }
+  if (kept) kept->data.reset();
+  if (times) times->kept_triangles += std::count(reuse.begin(), reuse.end(), 1);
+  std::atomic<size_t> cached_bytes{reused_bytes};
   run(threads, [&] {
     tbb::parallel_for(0, T, [&](int t) {
       if (idle(t)) return;
       Scratch& sc = scratch.local();
-      std::vector<int>& S = support[t];
-      RowCache& C = cache[t];
-      const bool keep = cached_bytes.load(std::memory_order_relaxed) < row_cache_bytes;
-      if (keep) C.start.reserve(static_cast<size_t>(pts.start[t + 1] - pts.start[t]) + 1);
-      for (int q = pts.start[t]; q < pts.start[t + 1]; ++q) {
-        if (keep) C.start.push_back(static_cast<int>(C.index.size()));
-        if (!point_row(sc, pts.uv[pts.order[q]])) continue;
+      std::vector<int>& P = point_support[t];
+      if (!reuse[t]) {
+        RowCache& C = cache[t];
+        const bool keep = cached_bytes.load(std::memory_order_relaxed) < row_cache_bytes;
+        if (keep) C.start.reserve(static_cast<size_t>(pts.start[t + 1] - pts.start[t]) + 1);
+        for (int q = pts.start[t]; q < pts.start[t + 1]; ++q) {
+          if (keep) C.start.push_back(static_cast<int>(C.index.size()));
+          if (!point_row(sc, pts.uv[pts.order[q]])) continue;
+          if (keep) {
+            C.index.insert(C.index.end(), sc.row.index.begin(), sc.row.index.end());
+            C.value.insert(C.value.end(), sc.row.value.begin(), sc.row.value.end());
+            if (fair) {
+              C.du.insert(C.du.end(), sc.row.du.begin(), sc.row.du.end());
+              C.dv.insert(C.dv.end(), sc.row.dv.begin(), sc.row.dv.end());
+            }
+          }
+          for (int j : sc.row.index)
+            if (sc.where[j] < 0) sc.where[j] = 0, P.push_back(j);
+        }
+        for (int j : P) sc.where[j] = -1;
+        std::sort(P.begin(), P.end());
         if (keep) {
-          C.index.insert(C.index.end(), sc.row.index.begin(), sc.row.index.end());
-          C.value.insert(C.value.end(), sc.row.value.begin(), sc.row.value.end());
-          if (fair) {
-            C.du.insert(C.du.end(), sc.row.du.begin(), sc.row.du.end());
-            C.dv.insert(C.dv.end(), sc.row.dv.begin(), sc.row.dv.end());
+          C.start.push_back(static_cast<int>(C.index.size()));
+          C.filled = true;
+          if (cached_bytes.fetch_add(C.bytes(), std::memory_order_relaxed) + C.bytes() > row_cache_bytes) {
+            cached_bytes.fetch_sub(C.bytes(), std::memory_order_relaxed);
+            C.release();
           }
         }
-        for (int j : sc.row.index)
-          if (sc.where[j] < 0) sc.where[j] = 0, S.push_back(j);
       }
-      if (keep) {
-        C.start.push_back(static_cast<int>(C.index.size()));
-        C.filled = true;
-        if (cached_bytes.fetch_add(C.bytes(), std::memory_order_relaxed) + C.bytes() > row_cache_bytes) {
-          cached_bytes.fetch_sub(C.bytes(), std::memory_order_relaxed);
-          C.release();
-        }
-      }
-      if (bends(t))
+      // The support set: the points' control points and those of the smoothness samples.
+      std::vector<int>& S = support[t];
+      S = P;
+      if (bends(t)) {
+        for (int j : S) sc.where[j] = 0;
         for_bend_samples(eval, d, spline.degree(), t, bend_level(t), sc.bend, [&](const BendSample& b) {
           for (const BasisRow& r : b.row)
             for (int j : r.index)
               if (sc.where[j] < 0) sc.where[j] = 0, S.push_back(j);
         });
-      for (int j : S) sc.where[j] = -1;
-      std::sort(S.begin(), S.end());
+        for (int j : S) sc.where[j] = -1;
+        std::sort(S.begin(), S.end());
+      }
     });
   });
   // Control-net membrane pairs (j < k).
@@ -467,6 +547,19 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
     }
   }
 
+  if (kept) {
+    // For the next solve: the rows, and what decides whether they still hold.
+    auto data = std::make_unique<KeptRows::Data>();
+    data->fair = fair;
+    data->triangles.resize(T);
+    for (int t = 0; t < T; ++t) data->triangles[t] = d.triangle(t);
+    data->knots = spline.knots();
+    data->order.assign(pts.order.begin(), pts.order.end());
+    data->start.assign(pts.start.begin(), pts.start.end());
+    data->cache = std::move(cache);
+    data->point_support = std::move(point_support);
+    kept->data = std::move(data);
+  }
   cache = std::vector<RowCache>();  // free before the factorisation
 
   // Regulariser scale: the mean diagonal of the data term over reached control points (the

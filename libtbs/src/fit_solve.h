@@ -5,6 +5,7 @@
 #include <tbs/spline.h>
 
 #include <cstddef>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -49,6 +50,7 @@ struct SolveTimes {
   double factorization = 0;  ///< CHOLMOD numeric factorisation
   double solve = 0;          ///< triangular solves and conjugate gradients
   int cg_iterations = 0;     ///< conjugate-gradient iterations of the split solves
+  long kept_triangles = 0;   ///< triangles whose basis rows came from the previous solve (KeptRows)
   long unknowns = 0;         ///< rows of the last call's factorised matrix (N split, 3N coupled)
   long nonzeros = 0;         ///< of the last call's factorised matrix (lower triangle)
 };
@@ -58,6 +60,20 @@ struct SolveTimes {
 /// 200,000 points and degree 4 (about 145 MB, 3.5 s less per fit there), part at a million
 /// points and degree 3, where a row is cheap to compute again.
 inline constexpr size_t kRowCacheBytes = size_t{256} << 20;
+
+/// Basis rows one solve keeps for the next solve of the same fit: the rows of the triangles
+/// whose points and surrounding knots have not changed since are taken as they are (the same
+/// numbers the evaluator would give again), the others computed. Within kRowCacheBytes. Pass
+/// one object to the solves of one fit; it notices a new domain or moved knots by itself.
+class KeptRows {
+ public:
+  KeptRows();
+  ~KeptRows();
+  KeptRows(const KeptRows&) = delete;
+  KeptRows& operator=(const KeptRows&) = delete;
+  struct Data;
+  std::unique_ptr<Data> data;
+};
 
 /// How the control-point system is solved. Split (the default): CHOLMOD's supernodal
 /// factorisation of the N x N matrix that x, y and z share, and conjugate gradients on the
@@ -72,12 +88,13 @@ enum class Solver { Split, CoupledSupernodal, CoupledSimplicial };
 /// with w_i = pts.fair_weight(i), over the control
 /// points of `spline` (knots fixed) and returns them. Deterministic for any thread count.
 /// Adds its times to `times` when given. `row_cache_bytes` bounds the basis rows kept between
-/// the two passes (the result does not depend on it).
+/// the two passes and, with `kept`, for the next solve (the result depends on neither).
 /// \throw SolverError if the factorisation fails.
 std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& eval,
                                          const FitPoints& pts, double lambda, int threads,
                                          SolveTimes* times = nullptr,
                                          Solver solver = Solver::Split,
-                                         size_t row_cache_bytes = kRowCacheBytes);
+                                         size_t row_cache_bytes = kRowCacheBytes,
+                                         KeptRows* kept = nullptr);
 
 }  // namespace tbs::detail

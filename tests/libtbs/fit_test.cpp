@@ -895,6 +895,41 @@ TEST(FitSolve, KeptBasisRowsChangeNothing) {
   }
 }
 
+// Rows kept from one solve for the next: after a knot sweep has moved knots (and points into
+// other triangles), the solve that takes the rows still valid gives the same control points
+// as one that computes every row, with and without the fairness term.
+TEST(FitSolve, RowsKeptForTheNextSolveChangeNothing) {
+  const SolveCase c = solve_case();
+  for (const double lambda : {1e-3, 0.0}) {
+    SCOPED_TRACE(lambda);
+    Spline s = c.fit.spline;
+    Evaluator eval(s);
+    std::vector<int> located = c.located, order = c.order, start = c.start;
+    detail::FitPoints pts{c.scan.positions, c.normals, c.fit.uv, located, order, start, {}, c.bend};
+    detail::KeptRows kept;
+    detail::SolveTimes times;
+    auto solve = [&](detail::KeptRows* k) {
+      return detail::solve_control_points(s, eval, pts, lambda, 2, &times, detail::Solver::Split,
+                                          detail::kRowCacheBytes, k);
+    };
+    EXPECT_EQ(solve(&kept), solve(nullptr));
+    EXPECT_EQ(times.kept_triangles, 0);
+    std::vector<int> vertices;
+    const Domain& d = s.domain();
+    for (int v = 0; v < d.vertex_count(); v += 3)
+      if (!d.is_boundary_vertex(v)) vertices.push_back(v);
+    const auto st = detail::optimize_knots(s, eval, located, pts, lambda, vertices, [](int, const Point2&) {}, 2);
+    ASSERT_GT(st.moved, 0);
+    detail::group_by_triangle(located, d.triangle_count(), order, start);
+    pts = {c.scan.positions, c.normals, c.fit.uv, located, order, start, {}, c.bend};
+    const std::vector<Point3> with = solve(&kept);
+    const long kept_now = times.kept_triangles;
+    EXPECT_EQ(with, solve(nullptr));
+    EXPECT_GT(kept_now, 0);
+    EXPECT_LT(kept_now, d.triangle_count());
+  }
+}
+
 // A knot sweep over every interior vertex of a fitted spline: computing again only the basis
 // rows a candidate move can change gives the same knots, control points and point triangles
 // as computing every row for every candidate, with one thread and with two.
