@@ -114,6 +114,11 @@ struct Evaluator::Impl {
   mutable tbb::enumerable_thread_specific<Scratch> scratch;
 
   Impl(const Spline& spline, EvalMode m) : s(&spline), mode(m), n(spline.degree()) { build(); }
+  // Everything but the per-thread scratch, for another spline with the same knots.
+  Impl(const Impl& o, const Spline& spline)
+      : s(&spline), mode(o.mode), n(o.n), nb(o.nb), nodes(o.nodes), split(o.split), keys(o.keys),
+        index(o.index), tops(o.tops), tri_box(o.tri_box), support(o.support), tri_grid(o.tri_grid),
+        support_grid(o.support_grid), vertex_nodes(o.vertex_nodes) {}
 
   const Point2& knot(int id) const { return s->knots()[id]; }
   int vertex_of(int id) const { return id / (n + 1); }
@@ -405,6 +410,8 @@ struct Evaluator::Impl {
 
 Evaluator::Evaluator(const Spline& spline, EvalMode mode)
     : impl_(std::make_unique<Impl>(spline, mode)) {}
+Evaluator::Evaluator(const Evaluator& other, const Spline& spline)
+    : impl_(std::make_unique<Impl>(*other.impl_, spline)) {}
 Evaluator::~Evaluator() = default;
 Evaluator::Evaluator(Evaluator&&) noexcept = default;
 Evaluator& Evaluator::operator=(Evaluator&&) noexcept = default;

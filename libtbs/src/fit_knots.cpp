@@ -419,7 +419,7 @@ KnotSweepStats optimize_knots(Spline& spline, Evaluator& eval, std::vector<int>&
       Worker& w = workers.local();
       if (!w.spline) {
         w.spline = std::make_unique<Spline>(spline);
-        w.eval = std::make_unique<Evaluator>(*w.spline);
+        w.eval = std::make_unique<Evaluator>(eval, *w.spline);
         w.synced = 0;  // a copy of the pass-start state: replay every earlier class's changes
       }
       sync(*w.spline, w.eval.get(), w.synced, log_size);

@@ -85,13 +85,20 @@ struct Checker {
   const Domain& d;
   int n;
   std::span<const Point2> knots;
-  detail::BoxGrid tri_grid;
 
-  Checker(const Domain& dom, int deg, std::span<const Point2> k) : d(dom), n(deg), knots(k) {
-    std::vector<Box2> boxes(d.triangle_count());
-    for (int t = 0; t < d.triangle_count(); ++t)
-      for (int v : d.triangle(t)) boxes[t].extend(d.vertex(v));
-    tri_grid.build(boxes, static_cast<size_t>(d.triangle_count()));
+  Checker(const Domain& dom, int deg, std::span<const Point2> k) : d(dom), n(deg), knots(k) {}
+
+  // The triangles' grid, built on first use: only boundary edges need it, and a check of a
+  // few interior triangles (the knot search's, per candidate move) should not pay for it.
+  const detail::BoxGrid& tri_grid() const {
+    if (!grid_built_) {
+      std::vector<Box2> boxes(d.triangle_count());
+      for (int t = 0; t < d.triangle_count(); ++t)
+        for (int v : d.triangle(t)) boxes[t].extend(d.vertex(v));
+      grid_.build(boxes, static_cast<size_t>(d.triangle_count()));
+      grid_built_ = true;
+    }
+    return grid_;
   }
 
   const Point2& knot(int v, int k) const { return knots[static_cast<size_t>(v) * (n + 1) + k]; }
@@ -119,7 +126,7 @@ struct Checker {
     Box2 hb;
     for (const auto& p : hull) hb.extend(p);
     int bad = -1;
-    tri_grid.query(hb, [&](int s) {
+    tri_grid().query(hb, [&](int s) {
       if (bad >= 0 && bad <= s) return;
       const auto& tri = d.triangle(s);
       std::vector<Point2> q{d.vertex(tri[0]), d.vertex(tri[1]), d.vertex(tri[2])};
@@ -137,6 +144,10 @@ struct Checker {
     check_boundary_edge(a, b, &issues);
     return issues.empty();
   }
+
+ private:
+  mutable detail::BoxGrid grid_;
+  mutable bool grid_built_ = false;
 };
 
 // splitmix64: a fixed, well-mixed pseudo-random sequence, so placements are reproducible.

@@ -342,6 +342,38 @@ TEST(BoxGrid, CoveredChangesAnswerLikeAFreshGrid) {
   EXPECT_GT(rebuilt, 100);
 }
 
+// A copy for a spline copy evaluates that copy: the same basis rows as its source, bit for
+// bit, its own control points, and knot updates of its own.
+TEST(Evaluator, CopyForASplineCopy) {
+  const Spline s = test::random_spline(3, grid(true), 29);
+  const Evaluator ev(s);
+  Spline t = s;
+  for (auto& c : t.control_points()) c += Point3(0.5, -1, 2);
+  Evaluator copy(ev, t);
+  const auto pts = test::random_domain_points(s.domain(), 300, 4);
+  BasisRow a, b;
+  for (const auto& u : pts) {
+    ASSERT_EQ(ev.basis_row(u, a), copy.basis_row(u, b));
+    ASSERT_EQ(a.index, b.index);
+    ASSERT_EQ(a.value, b.value);
+    ASSERT_EQ(a.du, b.du);
+    ASSERT_EQ(a.dv, b.dv);
+    ASSERT_LT((copy.value(u) - (ev.value(u) + Point3(0.5, -1, 2))).norm(), 1e-12);
+  }
+  int v = -1;
+  for (int i = 0; i < t.domain().vertex_count() && v < 0; ++i)
+    if (!t.domain().is_boundary_vertex(i)) v = i;
+  t.set_knot(v, 2, t.knot(v, 2) + Point2(0.003, 0.002));
+  copy.update_knots(v);
+  const Evaluator fresh(t);
+  int differ = 0;
+  for (const auto& u : pts) {
+    ASSERT_LT((copy.value(u) - fresh.value(u)).norm(), 1e-12);
+    differ += (ev.value(u) + Point3(0.5, -1, 2) - copy.value(u)).norm() > 1e-9;
+  }
+  EXPECT_GT(differ, 0);  // the source still evaluates the old knots
+}
+
 TEST(Evaluator, ControlPointsAreReadAtEachCall) {
   Spline s = test::random_spline(2, grid(), 18);
   const Evaluator ev(s);
