@@ -73,7 +73,6 @@ class LocalResolve {
   /// it (see accept()).
   double energy(const Evaluator& eval) {
     const auto q = static_cast<Eigen::Index>(local_.size()), m = static_cast<Eigen::Index>(free_.size());
-    supports(now_.boxes);
     if (accepted_.boxes.empty()) {
       now_.a.setZero(q, m);
       now_.du.setZero(q, m);
@@ -82,13 +81,9 @@ class LocalResolve {
       now_.fu.resize(q, 3);
       now_.fv.resize(q, 3);
     } else {
-      now_.a = accepted_.a;
-      now_.du = accepted_.du;
-      now_.dv = accepted_.dv;
-      now_.r = accepted_.r;
-      now_.fu = accepted_.fu;
-      now_.fv = accepted_.fv;
+      now_ = accepted_;
     }
+    supports(now_.boxes);
     const auto& cp = spline_.control_points();
     // In parallel: each point fills its own rows of the matrices, so the result does not
     // depend on the thread count. Isolated: a worker waiting here must not pick up another
