@@ -11,6 +11,8 @@
 #include "fit_solve.h"
 
 #include <nlohmann/json.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -342,7 +344,12 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
   detail::DomainInput din{scan.uv, scan.positions, scan.triangles, target, opt.features, opt.feature_angle};
   std::unique_ptr<detail::FitDomain> fdom_ptr;
   try {
-    fdom_ptr = std::make_unique<detail::FitDomain>(din);
+    // Inside an arena of opt.threads: parts of the build are plain TBB loops.
+    auto build = [&] { fdom_ptr = std::make_unique<detail::FitDomain>(din); };
+    if (opt.threads > 0)
+      tbb::task_arena(opt.threads).execute(build);
+    else
+      build();
   } catch (const InvalidInput& e) {
     throw InvalidInput(name + ": " + e.what());
   }
@@ -379,7 +386,20 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
     // Locate the points where the evaluator (and `tbs eval`) will: the domain builder keeps
     // every point of the region inside the domain; one it could not is left out and counted.
     t0 = Clock::now();
-    for (size_t i = 0; i < N; ++i) located[i] = fdom.excluded()[i] ? -1 : eval.locate(uv[i]);
+    // Each point's domain triangle (-1: excluded or outside), in parallel in an arena of
+    // opt.threads (each point writes its own entry).
+    auto locate_all = [&] {
+      auto body = [&] {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, N, 4096), [&](const tbb::blocked_range<size_t>& r) {
+          for (size_t i = r.begin(); i != r.end(); ++i) located[i] = fdom.excluded()[i] ? -1 : eval.locate(uv[i]);
+        });
+      };
+      if (opt.threads > 0)
+        tbb::task_arena(opt.threads).execute(body);
+      else
+        body();
+    };
+    locate_all();
     size_t used = 0;
     size_t measured = 0;
     for (size_t i = 0; i < N; ++i) used += located[i] >= 0, measured += located[i] >= 0 && !guide(i);
@@ -541,7 +561,7 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
             fdom.move_vertex(fdom.ids()[*it], p);
           }
           for (int v : changed) eval.update_knots(v);
-          for (size_t i = 0; i < N; ++i) located[i] = fdom.excluded()[i] ? -1 : eval.locate(uv[i]);
+          locate_all();
           spline.control_points() = saved_cp;
           err = saved_err;
           e = saved_e;

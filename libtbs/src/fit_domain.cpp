@@ -18,6 +18,8 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -185,8 +187,11 @@ Adjacency adjacency(const Region& r, size_t n_points) {
   std::vector<int> fill(a.start.begin(), a.start.end() - 1);
   for (size_t f = 0; f < r.tris.size(); ++f)
     for (int v : r.tris[f]) a.star[fill[v]++] = static_cast<int>(f);
+  // The neighbours of each triangle in parallel (each writes its own entries; the caller's
+  // arena sets the threads), then the first duplicate edge in triangle order.
   a.across.resize(r.tris.size());
-  for (size_t f = 0; f < r.tris.size(); ++f)
+  std::vector<int8_t> duplicate_at(r.tris.size(), -1);  // the first edge k of f that repeats one
+  tbb::parallel_for(size_t{0}, r.tris.size(), [&](size_t f) {
     for (int k = 0; k < 3; ++k) {
       const int from = r.tris[f][k], to = r.tris[f][(k + 1) % 3];
       int g = -1;
@@ -194,11 +199,17 @@ Adjacency adjacency(const Region& r, size_t n_points) {
         if (q == static_cast<int>(f)) continue;
         const auto& t = r.tris[q];
         const int at = t[0] == from ? 0 : t[1] == from ? 1 : 2;
-        if (t[(at + 1) % 3] == to && q < static_cast<int>(f) && a.duplicate.face < 0)
-          a.duplicate = {static_cast<int>(f), from, to};
+        if (t[(at + 1) % 3] == to && q < static_cast<int>(f) && duplicate_at[f] < 0) duplicate_at[f] = static_cast<int8_t>(k);
         if (g < 0 && (t[(at + 1) % 3] == to || t[(at + 2) % 3] == to)) g = q;
       }
       a.across[f][k] = g;
+    }
+  });
+  for (size_t f = 0; f < r.tris.size(); ++f)
+    if (duplicate_at[f] >= 0) {
+      const int k = duplicate_at[f];
+      a.duplicate = {static_cast<int>(f), r.tris[f][k], r.tris[f][(k + 1) % 3]};
+      break;
     }
   return a;
 }
