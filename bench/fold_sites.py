@@ -8,7 +8,9 @@ again as `tbs fit` did it (subdivided to the fit's point count when the fit used
 the script checks that the count matches), and for every
 domain triangle where the fit folds (`tbs info`: shape.folded_triangles) the script prints
 its corners on the domain boundary, the mesh points (vertices and subdivision points) inside
-it, and the share of its area that the flattened mesh covers. A share near 0 is a fold in the
+it, the share of its area that the flattened mesh covers, and how far the data itself turns
+there: the largest angle between the normals of two mesh faces (of the flattened, possibly
+subdivided mesh) whose parameter centroids lie in the triangle. A share near 0 is a fold in the
 margin: the part of the domain between the outline the domain builder simplifies and offsets
 and the data (fit_domain.cpp), where no point holds the surface. Then the totals, and the
 share of the whole domain that the mesh leaves uncovered. docs/benchmarks.md#where-the-folds-are.
@@ -74,21 +76,45 @@ def samples(t, k):
     return rng.dirichlet([1, 1, 1], k) @ V[T[t]]
 
 
-def inside(t):
+def in_triangle(t, x):
     a0, e1, e2 = V[T[t][0]], V[T[t][1]] - V[T[t][0]], V[T[t][2]] - V[T[t][0]]
-    m = np.linalg.solve(np.array([e1, e2]).T, (uv - a0).T).T
-    return int(((m >= 0).all(1) & (m.sum(1) <= 1)).sum())
+    m = np.linalg.solve(np.array([e1, e2]).T, (x - a0).T).T
+    return (m >= 0).all(1) & (m.sum(1) <= 1)
+
+
+def inside(t):
+    return int(in_triangle(t, uv).sum())
+
+
+xyz = np.asarray(p["points"], float)
+face_normal = np.cross(xyz[faces[:, 1]] - xyz[faces[:, 0]], xyz[faces[:, 2]] - xyz[faces[:, 0]])
+face_normal /= np.maximum(np.linalg.norm(face_normal, axis=1), 1e-300)[:, None]
+face_centroid = uv[faces].mean(1)
+
+
+def turn(t):
+    """The largest angle (degrees) between the normals of two mesh faces centred in t; None for fewer than two."""
+    n = face_normal[in_triangle(t, face_centroid)]
+    if len(n) < 2:
+        return None
+    return float(np.degrees(np.arccos(np.clip((n @ n.T).min(), -1, 1))))
 
 
 print("%s: %d domain triangles, %d folded" % (a.fit, len(T), len(folded)))
-print("| triangle | corners on the boundary | mesh points inside | area covered by the mesh |")
-print("|---|---|---|---|")
+print("| triangle | corners on the boundary | mesh points inside | area covered by the mesh | data turns by (largest angle between face normals) |")
+print("|---|---|---|---|---|")
 margin = 0
+sharp = 0
 for t in folded:
     share = covered(samples(t, a.samples)).mean()
     margin += share < 0.5
-    print("| %d | %d | %d | %.2f |" % (t, sum(int(v) in boundary for v in T[t]), inside(t), share))
+    angle = turn(t)
+    sharp += share >= 0.5 and angle is not None and angle > 90
+    print("| %d | %d | %d | %.2f | %s |" % (t, sum(int(v) in boundary for v in T[t]), inside(t), share,
+                                          "-" if angle is None else "%.1f deg" % angle))
 areas = 0.5 * np.abs(np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]]))
 uncovered = sum(areas[t] * (1 - covered(samples(t, 40)).mean()) for t in range(len(T)))
 print("%d of %d folded triangles lie mostly (more than half) outside the mesh; the mesh leaves %.1f %% of "
       "the domain's area uncovered" % (margin, len(folded), 100 * uncovered / areas.sum()))
+print("%d of the %d folded triangles inside the mesh hold data that turns by more than 90 degrees"
+      % (sharp, len(folded) - margin))
