@@ -369,13 +369,17 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
     return std::pair{std::move(start), std::move(items)};
   };
   // (triangle, position of j in its support set) and the membrane partners k > j of each j.
-  const auto [tri_start, tri_items] = by_point(std::pair<int, int>{}, [&](auto&& f) {
+  // (Named members, not structured bindings: clang before 16 cannot capture those.)
+  const auto tri_of = by_point(std::pair<int, int>{}, [&](auto&& f) {
     for (int t = 0; t < T; ++t)
       for (size_t a = 0; a < support[t].size(); ++a) f(support[t][a], std::pair{t, static_cast<int>(a)});
   });
-  const auto [net_start, net_items] = by_point(0, [&](auto&& f) {
+  const auto net_of = by_point(0, [&](auto&& f) {
     for (auto [j, k] : net) f(j, k);
   });
+  const std::vector<size_t>&tri_start = tri_of.first, &net_start = net_of.first;
+  const std::vector<std::pair<int, int>>& tri_items = tri_of.second;
+  const std::vector<int>& net_items = net_of.second;
   std::vector<std::vector<int>> rows(N);
   run(threads, [&] {
     tbb::parallel_for(0, N, [&](int j) {
