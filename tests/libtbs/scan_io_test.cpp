@@ -1,3 +1,4 @@
+#include <CGAL/Eigen_svd.h>
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/jet_estimate_normals.h>
 #include <gtest/gtest.h>
@@ -5,6 +6,8 @@
 #include <tbs/errors.h>
 #include <tbs/scan.h>
 #include <unistd.h>
+
+#include "jet_solver.h"
 
 #include <algorithm>
 #include <array>
@@ -903,6 +906,34 @@ TEST(NormalEstimation, MatchCgalJetEstimateNormalsToRounding) {
     }
     EXPECT_LT(worst, 1e-12) << "k = " << k;
   }
+}
+
+TEST(NormalEstimation, JetSolverGivesTheSvdSolutionAlsoWhenRankDeficient) {
+  // The jet fit's solver (a complete orthogonal decomposition) against CGAL's Jacobi SVD, on
+  // the k x 6 systems of a degree-2 jet: well-posed ones, and rank-deficient ones (the
+  // neighbours on two lines x = const, so that 1, x and x^2 are dependent), where the
+  // minimum-norm solution is the one both must give. A plain QR would fail the second.
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> coord(-1, 1);
+  for (const bool deficient : {false, true})
+    for (int trial = 0; trial < 20; ++trial) {
+      const int k = 18;
+      detail::JetSolver::Matrix m(k, 6);
+      detail::JetSolver::Vector b(k), b_svd(k);
+      for (int i = 0; i < k; ++i) {
+        const double x = deficient ? (i % 2 ? 0.5 : -0.25) : coord(rng), y = coord(rng);
+        const double row[6] = {1, x, y, x * x, x * y, y * y};
+        for (int c = 0; c < 6; ++c) m.set(i, c, row[c]);
+        const double z = 0.3 * x - 0.2 * y + 0.7 * x * y + 0.01 * coord(rng);
+        b.set(i, z);
+        b_svd.set(i, z);
+      }
+      const double condition = detail::JetSolver::solve(m, b);
+      CGAL::Eigen_svd::solve(m, b_svd);
+      EXPECT_TRUE(deficient ? condition > 0 : std::isfinite(condition) && condition >= 1) << condition;
+      for (int c = 0; c < 6; ++c) EXPECT_NEAR(b(c), b_svd(c), 1e-12) << (deficient ? "rank-deficient, " : "") << "trial "
+                                                                    << trial << ", coefficient " << c;
+    }
 }
 
 TEST(NormalEstimation, InvalidInputs) {
