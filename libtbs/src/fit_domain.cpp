@@ -291,6 +291,7 @@ std::vector<std::vector<int>> boundary_loops(const Region& r, const Adjacency& a
 // Keeps the largest edge-connected component of a region; returns the dropped triangle count.
 // `adj` is the region's adjacency, made again for the kept triangles when some are dropped.
 size_t keep_largest_component(Region& r, std::span<const Point2> uv, Adjacency& adj) {
+  const bool manifold = adj.duplicate.face < 0;
   std::vector<int> comp(r.tris.size(), -1);
   std::vector<double> area;
   for (size_t s = 0; s < r.tris.size(); ++s) {
@@ -305,10 +306,18 @@ size_t keep_largest_component(Region& r, std::span<const Point2> uv, Adjacency& 
       const auto& t = r.tris[f];
       area[c] += signed_area2(uv[t[0]], uv[t[1]], uv[t[2]]);
       // Every triangle sharing an edge, also where more than two do (a face given twice is
-      // kept with its copy, and boundary_loops then names it).
+      // kept with its copy, and boundary_loops then names it). An edge of three or more
+      // triangles runs twice in one direction, so without such a duplicate every edge has at
+      // most the one neighbour `across` names: the same triangles in the same order, without
+      // a search of the stars.
       for (int k = 0; k < 3; ++k)
-        for (int g : adj.star_of(t[k]))
-          if (comp[g] < 0 && has_point(r.tris[g], t[(k + 1) % 3])) comp[g] = c, stack.push_back(g);
+        if (manifold) {
+          const int g = adj.across[static_cast<size_t>(f)][static_cast<size_t>(k)];
+          if (g >= 0 && comp[g] < 0) comp[g] = c, stack.push_back(g);
+        } else {
+          for (int g : adj.star_of(t[k]))
+            if (comp[g] < 0 && has_point(r.tris[g], t[(k + 1) % 3])) comp[g] = c, stack.push_back(g);
+        }
     }
   }
   if (area.size() <= 1) return 0;
@@ -810,6 +819,20 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
     bands = band_creases(region, adj, in.uv, in.positions, in.feature_angle_deg, h, taken);
   }
 
+  // The points the domain must hold, in the order the region's triangles first name them
+  // (neighbouring triangles are near each other in the list), then the rest: each check below
+  // walks from the face of the point before, a short way. In input order, points scattered
+  // over a scan made every walk cross the domain.
+  std::vector<size_t> to_check;
+  {
+    std::vector<char> listed(n, 0);
+    for (const auto& t : region.tris)
+      for (int v : t)
+        if (!listed[static_cast<size_t>(v)]) listed[static_cast<size_t>(v)] = 1, to_check.push_back(static_cast<size_t>(v));
+    for (size_t i = 0; i < n; ++i)
+      if (!m.excluded[i] && !listed[i]) to_check.push_back(i);
+  }
+
   // Simplify, offset and mesh; retry with a tighter tolerance while a point is left outside.
   double tau = 0.5 * h;
   for (int attempt = 0;; ++attempt) {
@@ -1066,8 +1089,8 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
     // outside is left to the fit, which leaves it out and counts it (points_excluded).
     size_t outside = 0;
     WCdt::Face_handle hint;
-    for (size_t i = 0; i < n && (outside == 0 || tau > 0); ++i) {
-      if (m.excluded[i]) continue;
+    for (size_t q = 0; q < to_check.size() && (outside == 0 || tau > 0); ++q) {
+      const size_t i = to_check[q];
       WCdt::Locate_type lt;
       int li;
       auto f = m.cdt.locate(cp(in.uv[i]), lt, li, hint);

@@ -162,6 +162,44 @@ TEST(Fit, OutlyingParametersAreLeftOutAndCounted) {
   for (size_t i = 3000; i < 3005; ++i) EXPECT_TRUE(std::isnan(r.error[i]));
 }
 
+// A mesh of two parts is fitted on its largest edge-connected part; the other is left out and
+// counted. Parts that touch at a vertex only are separate parts (the shared vertex stays with
+// the larger one), as are parts that share nothing.
+TEST(Fit, MeshKeepsItsLargestEdgeConnectedPart) {
+  auto f = [](double u, double v) { return Point3(u, v, 0.1 * u * v); };
+  const Scan grid = grid_scan(f, 12, 12, 0, 47);
+  const int corner = 12 * 12 - 1;  // (u, v) = (1, 1)
+  for (const bool touching : {true, false}) {
+    Scan s = grid;
+    // A 3 x 3 patch beyond the corner (1, 1), with its own corner on it or just beside it.
+    const double step = 1.0 / 11, gap = touching ? 0.0 : 0.5 * step;
+    std::vector<int> id(9);
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i < 3; ++i) {
+        if (touching && i == 0 && j == 0) {
+          id[0] = corner;
+          continue;
+        }
+        const double u = 1 + gap + i * step, v = 1 + gap + j * step;
+        id[static_cast<size_t>(j * 3 + i)] = static_cast<int>(s.positions.size());
+        s.positions.push_back(f(u, v));
+        s.uv.emplace_back(u, v);
+      }
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 2; ++i) {
+        const int a = id[static_cast<size_t>(j * 3 + i)], b = id[static_cast<size_t>(j * 3 + i + 1)],
+                  c = id[static_cast<size_t>(j * 3 + i + 4)], d = id[static_cast<size_t>(j * 3 + i + 3)];
+        s.triangles.push_back({a, b, c});
+        s.triangles.push_back({a, c, d});
+      }
+    const FitResult r = fit(s, {});
+    EXPECT_EQ(r.report.points_excluded, touching ? 8u : 9u) << (touching ? "touching" : "apart");
+    EXPECT_TRUE(r.report.converged) << r.report.stop_reason;
+    EXPECT_FALSE(std::isnan(r.error[static_cast<size_t>(corner)]));
+    for (size_t i = grid.positions.size(); i < s.positions.size(); ++i) EXPECT_TRUE(std::isnan(r.error[i])) << i;
+  }
+}
+
 // Duplicated bare points (overlapping scans) share a Delaunay vertex: they used to be left out
 // as if outside the region. Every copy is fitted, and each copy has the same error.
 TEST(Fit, DuplicatePointsAreAllFitted) {
