@@ -18,7 +18,9 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <cmath>
@@ -333,16 +335,23 @@ size_t keep_largest_component(Region& r, std::span<const Point2> uv, Adjacency& 
 
 // Marks as not excluded every point whose (u, v) equals that of a point that is not.
 void include_duplicates(std::span<const Point2> uv, std::vector<char>& excluded) {
-  std::vector<int> order(uv.size());
-  std::iota(order.begin(), order.end(), 0);
-  auto key = [&](int i) { return std::pair(uv[i].x(), uv[i].y()); };
-  std::sort(order.begin(), order.end(), [&](int a, int b) { return key(a) < key(b); });
+  // (u, v, index), sorted in parallel: the order within a group of equal (u, v) does not
+  // matter, a group is used as a whole.
+  struct Entry {
+    double u, v;
+    int i;
+  };
+  std::vector<Entry> order(uv.size());
+  for (size_t i = 0; i < uv.size(); ++i) order[i] = {uv[i].x(), uv[i].y(), static_cast<int>(i)};
+  auto same = [](const Entry& a, const Entry& b) { return a.u == b.u && a.v == b.v; };
+  tbb::parallel_sort(order.begin(), order.end(),
+                     [](const Entry& a, const Entry& b) { return a.u < b.u || (a.u == b.u && a.v < b.v); });
   for (size_t i = 0; i < order.size();) {
     size_t j = i;
     bool used = false;
-    for (; j < order.size() && key(order[j]) == key(order[i]); ++j) used |= !excluded[order[j]];
+    for (; j < order.size() && same(order[j], order[i]); ++j) used |= !excluded[static_cast<size_t>(order[j].i)];
     if (used)
-      for (size_t k = i; k < j; ++k) excluded[order[k]] = 0;
+      for (size_t k = i; k < j; ++k) excluded[static_cast<size_t>(order[k].i)] = 0;
     i = j;
   }
 }
@@ -361,29 +370,39 @@ Region region_from_points(std::span<const Point2> uv) {
                        "needs parameters that span an area");
   // Local spacing: per vertex the shortest incident edge, then the median of that over the
   // vertex and its neighbours (densities vary: parameterizations stretch).
+  // Both passes in parallel over the vertices (read-only walks of the triangulation; each
+  // vertex writes its own entry).
+  std::vector<Dt::Vertex_handle> vertices;
+  vertices.reserve(dt.number_of_vertices());
+  for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) vertices.push_back(v);
   std::vector<double> nn(uv.size(), 0.0), local(uv.size(), 0.0);
-  for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) {
+  tbb::parallel_for(size_t{0}, vertices.size(), [&](size_t q) {
+    const Dt::Vertex_handle v = vertices[q];
     double best = std::numeric_limits<double>::infinity();
     auto c = dt.incident_vertices(v), done = c;
     do {
       if (!dt.is_infinite(c)) best = std::min(best, std::sqrt(CGAL::squared_distance(v->point(), c->point())));
     } while (++c != done);
     nn[v->info()] = best;
-  }
-  std::vector<double> ring, all;
-  for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) all.push_back(nn[v->info()]);
+  });
+  std::vector<double> all;
+  for (const Dt::Vertex_handle& v : vertices) all.push_back(nn[v->info()]);
   std::nth_element(all.begin(), all.begin() + all.size() / 2, all.end());
   const double global = all[all.size() / 2];
-  for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) {
-    ring.assign(1, nn[v->info()]);
-    auto c = dt.incident_vertices(v), done = c;
-    do {
-      if (!dt.is_infinite(c)) ring.push_back(nn[c->info()]);
-    } while (++c != done);
-    std::nth_element(ring.begin(), ring.begin() + ring.size() / 2, ring.end());
-    // Never below the global median: a few close pairs must not carve holes.
-    local[v->info()] = std::max(global, ring[ring.size() / 2]);
-  }
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, vertices.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
+    std::vector<double> ring;
+    for (size_t q = range.begin(); q != range.end(); ++q) {
+      const Dt::Vertex_handle v = vertices[q];
+      ring.assign(1, nn[v->info()]);
+      auto c = dt.incident_vertices(v), done = c;
+      do {
+        if (!dt.is_infinite(c)) ring.push_back(nn[c->info()]);
+      } while (++c != done);
+      std::nth_element(ring.begin(), ring.begin() + ring.size() / 2, ring.end());
+      // Never below the global median: a few close pairs must not carve holes.
+      local[v->info()] = std::max(global, ring[ring.size() / 2]);
+    }
+  });
   // Random samples leave empty circles a few times the local spacing; only larger gaps are
   // outline or holes: a triangle stays if its circumradius is at most 6 times the largest
   // local spacing at its corners (an alpha shape with a local alpha).
@@ -522,12 +541,12 @@ std::vector<std::vector<Point2>> band_creases(const Region& r, const Adjacency& 
   const size_t F = r.tris.size();
   std::vector<Vector3> fn(F);
   std::vector<Point2> centroid(F);
-  for (size_t f = 0; f < F; ++f) {
+  tbb::parallel_for(size_t{0}, F, [&](size_t f) {
     const auto& t = r.tris[f];
     const Vector3 nrm = (pos[t[1]] - pos[t[0]]).cross(pos[t[2]] - pos[t[0]]);
     fn[f] = nrm.norm() > 0 ? Vector3(nrm.normalized()) : Vector3::Zero();
     centroid[f] = (uv[t[0]] + uv[t[1]] + uv[t[2]]) / 3.0;
-  }
+  });
   const double cos_band = std::cos(angle_deg / 3 * std::numbers::pi / 180);
   const double cos_crease = std::cos(angle_deg * std::numbers::pi / 180);
   // Triangles at the region's outline are stretched and tilted (alpha shape): not crease clues.
