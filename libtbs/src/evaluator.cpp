@@ -4,11 +4,11 @@
 #include <tbs/tolerances.h>
 
 #include "box_grid.h"
+#include "thread_arena.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -566,12 +566,7 @@ size_t Evaluator::evaluate_batch(std::span<const Point2> u, std::span<Point3> po
       }
     };
     const tbb::blocked_range<size_t> range(0, m, 256);
-    if (threads > 0) {
-      tbb::task_arena arena(threads);
-      arena.execute([&] { tbb::parallel_for(range, body); });
-    } else {
-      tbb::parallel_for(range, body);
-    }
+    detail::with_threads(threads, [&] { tbb::parallel_for(range, body); });
   }
   return static_cast<size_t>(std::count(inside.begin(), inside.end(), 0));
 }

@@ -9,11 +9,11 @@
 #include "fit_domain.h"
 #include "fit_knots.h"
 #include "fit_solve.h"
+#include "thread_arena.h"
 
 #include <nlohmann/json.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
@@ -320,11 +320,9 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
           progress("normals", text, f);
         };
         // Inside an arena of opt.threads: the estimate is a plain TBB loop.
-        if (opt.threads > 0)
-          tbb::task_arena(opt.threads).execute(
-              [&] { normals = estimate_normals(scan.positions, scan.uv, scan.triangles, kNormalNeighbours, report); });
-        else
+        detail::with_threads(opt.threads, [&] {
           normals = estimate_normals(scan.positions, scan.uv, scan.triangles, kNormalNeighbours, report);
+        });
       } catch (const InvalidInput& e) {
         throw InvalidInput(name + ": cannot estimate normals (" + e.what() +
                            "); give normals in the input, or turn the fairness term off (--fairness 0)");
@@ -345,11 +343,7 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
   std::unique_ptr<detail::FitDomain> fdom_ptr;
   try {
     // Inside an arena of opt.threads: parts of the build are plain TBB loops.
-    auto build = [&] { fdom_ptr = std::make_unique<detail::FitDomain>(din); };
-    if (opt.threads > 0)
-      tbb::task_arena(opt.threads).execute(build);
-    else
-      build();
+    detail::with_threads(opt.threads, [&] { fdom_ptr = std::make_unique<detail::FitDomain>(din); });
   } catch (const InvalidInput& e) {
     throw InvalidInput(name + ": " + e.what());
   }
@@ -389,15 +383,11 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
     // Each point's domain triangle (-1: excluded or outside), in parallel in an arena of
     // opt.threads (each point writes its own entry).
     auto locate_all = [&] {
-      auto body = [&] {
+      detail::with_threads(opt.threads, [&] {
         tbb::parallel_for(tbb::blocked_range<size_t>(0, N, 4096), [&](const tbb::blocked_range<size_t>& r) {
           for (size_t i = r.begin(); i != r.end(); ++i) located[i] = fdom.excluded()[i] ? -1 : eval.locate(uv[i]);
         });
-      };
-      if (opt.threads > 0)
-        tbb::task_arena(opt.threads).execute(body);
-      else
-        body();
+      });
     };
     locate_all();
     size_t used = 0;

@@ -1,5 +1,7 @@
 #include "fit_knots.h"
 
+#include "thread_arena.h"
+
 #include <tbs/knots.h>
 #include <tbs/predicates.h>
 #include <tbs/tolerances.h>
@@ -430,12 +432,7 @@ KnotSweepStats optimize_knots(Spline& spline, Evaluator& eval, std::vector<int>&
       else
         tbb::parallel_for(size_t{0}, cls.size(), body);
     };
-    if (threads > 0) {
-      tbb::task_arena arena(threads);
-      arena.execute(loop);
-    } else {
-      loop();
-    }
+    with_threads(threads, loop);
     for (size_t q = 0; q < cls.size(); ++q) {
       const VertexResult& r = results[q];
       if (!r.tried) continue;

@@ -1,4 +1,5 @@
 #include "fit_solve.h"
+#include "thread_arena.h"
 
 #include <tbs/errors.h>
 
@@ -8,7 +9,6 @@
 #include <Eigen/SparseCore>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <array>
@@ -163,16 +163,6 @@ void for_bend_samples(const Evaluator& eval, const Domain& d, int degree, int t,
       }
 }
 
-template <class F>
-void run(int threads, F&& f) {
-  if (threads > 0) {
-    tbb::task_arena arena(threads);
-    arena.execute(f);
-  } else {
-    f();
-  }
-}
-
 }  // namespace
 
 struct KeptRows::Data {
@@ -287,7 +277,7 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
   if (kept) kept->data.reset();
   if (times) times->kept_triangles += std::count(reuse.begin(), reuse.end(), 1);
   std::atomic<size_t> cached_bytes{reused_bytes};
-  run(threads, [&] {
+  with_threads(threads, [&] {
     tbb::parallel_for(0, T, [&](int t) {
       if (idle(t)) return;
       Scratch& sc = scratch.local();
@@ -381,7 +371,7 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
   const std::vector<std::pair<int, int>>& tri_items = tri_of.second;
   const std::vector<int>& net_items = net_of.second;
   std::vector<std::vector<int>> rows(N);
-  run(threads, [&] {
+  with_threads(threads, [&] {
     tbb::parallel_for(0, N, [&](int j) {
       Scratch& sc = scratch.local();
       std::vector<int>& r = rows[j];
@@ -419,7 +409,7 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
   std::vector<Local> locals(kChunk);
   for (int t0 = 0; t0 < T; t0 += kChunk) {
     const int t1 = std::min(T, t0 + kChunk);
-    run(threads, [&] {
+    with_threads(threads, [&] {
       tbb::parallel_for(t0, t1, [&](int t) {
         Local& L = locals[t - t0];
         L.S.clear();
@@ -629,7 +619,7 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
     int* inner = M.innerIndexPtr();
     double* values = M.valuePtr();
     static constexpr int kSym[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
-    run(threads, [&] {
+    with_threads(threads, [&] {
       tbb::parallel_for(0, N, [&](int j) {
         for (int a = 0; a < 3; ++a) {
           size_t out = static_cast<size_t>(outer[3 * j + a]);

@@ -3,8 +3,9 @@
 #include <tbs/errors.h>
 #include <tbs/shape_check.h>
 
+#include "thread_arena.h"
+
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -72,8 +73,7 @@ ShapeCheck check_shape(const Spline& spline, const Evaluator& eval, int resoluti
     const double s1 = kInside / 3 + (1 - kInside) * b1, s2 = kInside / 3 + (1 - kInside) * b2;
     return Point2((1 - s1 - s2) * d.vertex(c[0]) + s1 * d.vertex(c[1]) + s2 * d.vertex(c[2]));
   };
-  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
-  arena.execute([&] {
+  detail::with_threads(threads, [&] {
     tbb::parallel_for(0, T, [&](int t) {
       TriangleResult& r = tri[static_cast<size_t>(t)];
       // Lattice (i, j), i + j <= R, at barycentric (i / R, j / R) for corners 1 and 2.
