@@ -20,6 +20,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
@@ -179,8 +180,8 @@ struct Adjacency {
 
 bool has_point(const std::array<int, 3>& t, int v) { return t[0] == v || t[1] == v || t[2] == v; }
 
-Adjacency adjacency(const Region& r, size_t n_points) {
-  Adjacency a;
+// The stars of a region's points.
+void add_stars(Adjacency& a, const Region& r, size_t n_points) {
   a.start.assign(n_points + 1, 0);
   for (const auto& t : r.tris)
     for (int v : t) ++a.start[v + 1];
@@ -189,6 +190,22 @@ Adjacency adjacency(const Region& r, size_t n_points) {
   std::vector<int> fill(a.start.begin(), a.start.end() - 1);
   for (size_t f = 0; f < r.tris.size(); ++f)
     for (int v : r.tris[f]) a.star[fill[v]++] = static_cast<int>(f);
+}
+
+// The adjacency of a region whose neighbours are already known: `across` as Adjacency holds
+// it, for a region where every edge has at most two triangles, run in opposite directions (a
+// triangulation's triangles; then no edge repeats and each has the one neighbour the search
+// below would find).
+Adjacency adjacency(const Region& r, size_t n_points, std::vector<std::array<int, 3>> across) {
+  Adjacency a;
+  add_stars(a, r, n_points);
+  a.across = std::move(across);
+  return a;
+}
+
+Adjacency adjacency(const Region& r, size_t n_points) {
+  Adjacency a;
+  add_stars(a, r, n_points);
   // The neighbours of each triangle in parallel (each writes its own entries; the caller's
   // arena sets the threads), then the first duplicate edge in triangle order.
   a.across.resize(r.tris.size());
@@ -328,8 +345,26 @@ size_t keep_largest_component(Region& r, std::span<const Point2> uv, Adjacency& 
   for (size_t f = 0; f < r.tris.size(); ++f)
     if (comp[f] == best) kept.tris.push_back(r.tris[f]);
   const size_t dropped = r.tris.size() - kept.tris.size();
-  r = std::move(kept);
-  adj = adjacency(r, uv.size());
+  if (manifold) {
+    // A kept triangle's neighbours are in its component: renumbered, they stay its neighbours.
+    std::vector<int> renumbered(r.tris.size(), -1);
+    for (size_t f = 0, next = 0; f < r.tris.size(); ++f)
+      if (comp[f] == best) renumbered[f] = static_cast<int>(next++);
+    std::vector<std::array<int, 3>> across;
+    across.reserve(kept.tris.size());
+    for (size_t f = 0; f < r.tris.size(); ++f)
+      if (comp[f] == best) {
+        std::array<int, 3> g = adj.across[f];
+        for (int& q : g)
+          if (q >= 0) q = renumbered[static_cast<size_t>(q)];
+        across.push_back(g);
+      }
+    r = std::move(kept);
+    adj = adjacency(r, uv.size(), std::move(across));
+  } else {
+    r = std::move(kept);
+    adj = adjacency(r, uv.size());
+  }
   return dropped;
 }
 
@@ -358,8 +393,9 @@ void include_duplicates(std::span<const Point2> uv, std::vector<char>& excluded)
 
 // Bare parameters: Delaunay triangulation, minus triangles much larger than the local point
 // spacing (an alpha shape), so concave outlines and holes of the data are kept (the caller
-// then keeps its largest component).
-Region region_from_points(std::span<const Point2> uv) {
+// then keeps its largest component). `across` receives the kept triangles' neighbours, from the
+// triangulation (as Adjacency::across holds them).
+Region region_from_points(std::span<const Point2> uv, std::vector<std::array<int, 3>>& across) {
   std::vector<std::pair<CPoint, int>> pts;
   pts.reserve(uv.size());
   for (size_t i = 0; i < uv.size(); ++i) pts.emplace_back(cp(uv[i]), static_cast<int>(i));
@@ -410,7 +446,7 @@ Region region_from_points(std::span<const Point2> uv) {
   std::vector<Dt::Face_handle> faces;
   for (auto f = dt.finite_faces_begin(); f != dt.finite_faces_end(); ++f) faces.push_back(f);
   std::vector<char> keep(faces.size());
-  for (size_t i = 0; i < faces.size(); ++i) {
+  tbb::parallel_for(size_t{0}, faces.size(), [&](size_t i) {
     faces[i]->info() = static_cast<int>(i);
     const auto& a = faces[i]->vertex(0)->point();
     const auto& b = faces[i]->vertex(1)->point();
@@ -423,7 +459,7 @@ Region region_from_points(std::span<const Point2> uv) {
                                          local[faces[i]->vertex(2)->info()]});
     // Flat slivers have a large circumradius but short edges: they are not gaps.
     keep[i] = circumradius <= alpha || std::max({la, lb, lc}) <= 0.5 * alpha;
-  }
+  });
   // Interior gaps smaller than a disc of about 4 spacings are sampling noise, not holes.
   {
     std::vector<int> seen(faces.size(), 0);
@@ -453,31 +489,54 @@ Region region_from_points(std::span<const Point2> uv) {
     }
   }
   // Pinch vertices (two kept fans touching at a point) are filled back in until none is left.
+  auto pinched = [&](const Dt::Vertex_handle& v) {
+    int transitions = 0;
+    auto f = dt.incident_faces(v), done = f;
+    bool prev = !dt.is_infinite(f) && keep[f->info()];
+    do {
+      ++f;
+      const bool cur = !dt.is_infinite(f) && keep[f->info()];
+      if (cur != prev) ++transitions;
+      prev = cur;
+    } while (f != done);
+    return transitions > 2;
+  };
   for (int round = 0; round < 20; ++round) {
+    // A round changes nothing before its first pinch vertex: that one is found in parallel.
+    const size_t first = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, vertices.size(), 4096), vertices.size(),
+        [&](const tbb::blocked_range<size_t>& range, size_t best) {
+          for (size_t q = range.begin(); q < range.end() && q < best; ++q)
+            if (pinched(vertices[q])) return q;
+          return best;
+        },
+        [](size_t a, size_t b) { return std::min(a, b); });
     bool changed = false;
-    for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) {
-      int transitions = 0;
-      auto f = dt.incident_faces(v), done = f;
-      bool prev = !dt.is_infinite(f) && keep[f->info()];
+    for (size_t q = first; q < vertices.size(); ++q) {
+      if (!pinched(vertices[q])) continue;
+      auto g = dt.incident_faces(vertices[q]), gd = g;
       do {
-        ++f;
-        const bool cur = !dt.is_infinite(f) && keep[f->info()];
-        if (cur != prev) ++transitions;
-        prev = cur;
-      } while (f != done);
-      if (transitions > 2) {
-        auto g = dt.incident_faces(v), gd = g;
-        do {
-          if (!dt.is_infinite(g) && !keep[g->info()]) keep[g->info()] = 1, changed = true;
-        } while (++g != gd);
-      }
+        if (!dt.is_infinite(g) && !keep[g->info()]) keep[g->info()] = 1, changed = true;
+      } while (++g != gd);
     }
     if (!changed) break;
   }
+  std::vector<int> kept_index(faces.size(), -1);
   for (size_t i = 0; i < faces.size(); ++i)
-    if (keep[i])
+    if (keep[i]) {
+      kept_index[i] = static_cast<int>(r.tris.size());
       r.tris.push_back({faces[i]->vertex(0)->info(), faces[i]->vertex(1)->info(), faces[i]->vertex(2)->info()});
+    }
   if (r.tris.empty()) throw InvalidInput("the parameters (u, v) do not span an area");
+  // Edge (t[k], t[k + 1]) of a face is the one opposite its vertex k + 2.
+  across.assign(r.tris.size(), {-1, -1, -1});
+  tbb::parallel_for(size_t{0}, faces.size(), [&](size_t i) {
+    if (!keep[i]) return;
+    for (int k = 0; k < 3; ++k) {
+      const Dt::Face_handle g = faces[i]->neighbor((k + 2) % 3);
+      if (!dt.is_infinite(g)) across[static_cast<size_t>(kept_index[i])][static_cast<size_t>(k)] = kept_index[static_cast<size_t>(g->info())];
+    }
+  });
   return r;
 }
 
@@ -559,16 +618,25 @@ std::vector<std::vector<Point2>> band_creases(const Region& r, const Adjacency& 
       if (rim[v]) return true;
     return false;
   };
+  // Whether the edge k of f, to its neighbour g, bends by more than the band angle.
+  auto bent = [&](size_t f, int k, int g) {
+    if (taken.count(edge_key(r.tris[f][k], r.tris[f][(k + 1) % 3])) || fn[f].isZero() || fn[g].isZero()) return false;
+    if (at_rim(static_cast<int>(f)) || at_rim(g)) return false;
+    return fn[f].dot(fn[g]) < cos_band;
+  };
   std::vector<char> band(F, 0);
-  for (size_t f = 0; f < F; ++f)
-    for (int k = 0; k < 3; ++k) {
-      const int g = adj.across[f][k];
-      if (g < static_cast<int>(f)) continue;  // the outline, or seen from g
-      if (taken.count(edge_key(r.tris[f][k], r.tris[f][(k + 1) % 3])) || fn[f].isZero() || fn[g].isZero()) continue;
-      if (at_rim(static_cast<int>(f)) || at_rim(g)) continue;
-      if (fn[f].dot(fn[g]) >= cos_band) continue;
-      band[f] = band[g] = 1;
-    }
+  if (adj.duplicate.face < 0) {
+    // Every edge has at most two triangles, each the other's neighbour: each triangle looks at
+    // its own edges, in parallel.
+    tbb::parallel_for(size_t{0}, F, [&](size_t f) {
+      for (int k = 0; k < 3; ++k)
+        if (const int g = adj.across[f][k]; g >= 0 && bent(f, k, g)) band[f] = 1;
+    });
+  } else {
+    for (size_t f = 0; f < F; ++f)
+      for (int k = 0; k < 3; ++k)
+        if (const int g = adj.across[f][k]; g > static_cast<int>(f) && bent(f, k, g)) band[f] = band[g] = 1;
+  }
   // Components of band triangles, each listed by index, ordered by their first triangle.
   // Band triangles sharing a vertex are neighbours (a crease passing near a vertex leaves
   // gaps between edge-adjacent ones). Union-find: at a million noisy points most triangles
@@ -782,9 +850,11 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
   const size_t n = in.uv.size();
   if (n < 3) throw InvalidInput("a fit needs at least 3 points with parameters, got " + std::to_string(n));
 
-  Region region = in.faces.empty() ? region_from_points(in.uv) : region_from_faces(in.uv, in.faces);
-  // One adjacency for both (it took a second for each of two builds on 1M bare points).
-  Adjacency adj = adjacency(region, n);
+  std::vector<std::array<int, 3>> across;
+  Region region = in.faces.empty() ? region_from_points(in.uv, across) : region_from_faces(in.uv, in.faces);
+  // One adjacency for both (it took a second for each of two builds on 1M bare points); a
+  // Delaunay region comes with its neighbours.
+  Adjacency adj = in.faces.empty() ? adjacency(region, n, std::move(across)) : adjacency(region, n);
   keep_largest_component(region, in.uv, adj);
   m.excluded.assign(n, 1);
   double area = 0;

@@ -14,9 +14,10 @@
 #include <CGAL/Search_traits_adapter.h>
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/Spatial_sort_traits_adapter_3.h>
-#include <CGAL/hilbert_sort.h>
+#include <CGAL/Hilbert_sort_median_3.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 #include <tbs/errors.h>
 #include <tbs/scan.h>
 
@@ -28,10 +29,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <string>
 #include <thread>
-#include <unordered_map>
 
 namespace tbs {
 namespace {
@@ -61,18 +60,6 @@ constexpr int kMinNeighbours = (kJetDegree + 1) * (kJetDegree + 2) / 2;  // jet 
 // A neighbourhood whose second PCA variance is below this fraction of the first is a line or a
 // point: no plane, hence no normal. Far below any real sampling anisotropy.
 constexpr double kDegenerateRatio = 1e-12;
-
-struct BitsHash {
-  std::size_t operator()(const Point3& p) const {
-    std::uint64_t h = 0;
-    for (int i = 0; i < 3; ++i) {
-      std::uint64_t b;
-      std::memcpy(&b, &p[i], sizeof b);
-      h = (h ^ b) * 0x9E3779B97F4A7C15ULL;
-    }
-    return static_cast<std::size_t>(h ^ (h >> 31));
-  }
-};
 
 // The axis of least variance of `pts`, signed so that its largest component is positive.
 Vector3 pca_up(std::span<const Point3> pts) {
@@ -113,24 +100,52 @@ std::vector<Vector3> estimate_normals(std::span<const Point3> positions, std::sp
                            " - 1");
 
   // Duplicated positions (UV seams, merged scans) would fill a neighbourhood with copies of one
-  // point; the fit sees each position once and every copy gets its normal.
+  // point; the fit sees each position once and every copy gets its normal. Unique positions are
+  // numbered in the order of their first copy: (position, index) sorted in parallel, so that
+  // each group of equal positions starts with its first copy.
   std::vector<CPoint> unique;
   std::vector<std::uint32_t> unique_of(n);
   std::vector<std::uint32_t> first_of;  // a point at each unique position
   {
-    std::unordered_map<Point3, std::uint32_t, BitsHash> seen;
-    seen.reserve(n);
-    for (std::size_t i = 0; i < n; ++i) {
+    struct Entry {
+      Point3 p;
+      std::uint32_t i;
+    };
+    std::vector<Entry> sorted(n);
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
       Point3 key = positions[i];
       for (int c = 0; c < 3; ++c)
-        if (key[c] == 0.0) key[c] = 0.0;  // +0 and -0 are one position (and one hash)
-      auto [it, inserted] = seen.try_emplace(key, static_cast<std::uint32_t>(unique.size()));
-      if (inserted) {
-        unique.emplace_back(key.x(), key.y(), key.z());
+        if (key[c] == 0.0) key[c] = 0.0;  // +0 and -0 are one position
+      sorted[i] = {key, static_cast<std::uint32_t>(i)};
+    });
+    tbb::parallel_sort(sorted.begin(), sorted.end(), [](const Entry& a, const Entry& b) {
+      for (int c = 0; c < 3; ++c)
+        if (a.p[c] != b.p[c]) return a.p[c] < b.p[c];
+      return a.i < b.i;
+    });
+    // first[i]: the first copy of point i's position; is_first marks those.
+    std::vector<std::uint32_t> first(n);
+    std::vector<char> is_first(n, 0);
+    std::size_t groups = 0;
+    for (std::size_t j = 0; j < n; ++groups) {
+      std::size_t e = j + 1;
+      while (e < n && sorted[e].p == sorted[j].p) ++e;
+      is_first[sorted[j].i] = 1;
+      for (std::size_t q = j; q < e; ++q) first[sorted[q].i] = sorted[j].i;
+      j = e;
+    }
+    sorted = std::vector<Entry>();
+    unique.reserve(groups);
+    first_of.reserve(groups);
+    std::vector<std::uint32_t> id_of_first(n);
+    for (std::size_t i = 0; i < n; ++i)
+      if (is_first[i]) {
+        id_of_first[i] = static_cast<std::uint32_t>(unique.size());
+        const Point3& p = positions[i];
+        unique.emplace_back(p.x() == 0.0 ? 0.0 : p.x(), p.y() == 0.0 ? 0.0 : p.y(), p.z() == 0.0 ? 0.0 : p.z());
         first_of.push_back(static_cast<std::uint32_t>(i));
       }
-      unique_of[i] = it->second;
-    }
+    for (std::size_t i = 0; i < n; ++i) unique_of[i] = id_of_first[first[i]];
   }
   if (unique.size() < static_cast<std::size_t>(kMinNeighbours))
     throw InvalidInput("estimate_normals: " + std::to_string(unique.size()) +
@@ -163,7 +178,9 @@ std::vector<Vector3> estimate_normals(std::span<const Point3> positions, std::sp
   Tree tree(boost::counting_iterator<std::uint32_t>(0),
             boost::counting_iterator<std::uint32_t>(static_cast<std::uint32_t>(unique.size())),
             Tree::Splitter(), TreeTraits(point_map));
-  tree.build();  // before the parallel queries: the tree builds lazily otherwise
+  // Built before the parallel queries (it builds lazily otherwise); the parallel build makes
+  // the same splits as the serial one, only the two halves of a split in parallel.
+  tree.build<CGAL::Parallel_tag>();
   const Distance distance(point_map);
 
   // The copies of each unique position, in point order (compressed rows).
@@ -181,9 +198,11 @@ std::vector<Vector3> estimate_normals(std::span<const Point3> positions, std::sp
   // cache at every tree node and point.
   std::vector<std::uint32_t> order(unique.size());
   for (std::size_t u = 0; u < unique.size(); ++u) order[u] = static_cast<std::uint32_t>(u);
-  CGAL::hilbert_sort(order.begin(), order.end(),
-                     CGAL::Spatial_sort_traits_adapter_3<Kernel, IndexPointMap>(point_map),
-                     CGAL::Hilbert_sort_middle_policy());
+  // CGAL's median-policy Hilbert sort, its halves sorted in parallel, called directly:
+  // CGAL::hilbert_sort would first shuffle the range at random, serially (the order only
+  // makes the searches faster; it changes no normal).
+  CGAL::Hilbert_sort_median_3<CGAL::Spatial_sort_traits_adapter_3<Kernel, IndexPointMap>, CGAL::Parallel_tag>(
+      CGAL::Spatial_sort_traits_adapter_3<Kernel, IndexPointMap>(point_map))(order.begin(), order.end());
 
   // A point's normal depends only on its own neighbourhood, so neither the order of the points
   // nor the parallel loop changes it: the result is the same for any number of threads.
