@@ -177,9 +177,8 @@ std::string format_bytes(double bytes) {
 
 size_t estimate_fit_memory(size_t points, int degree, size_t control_points) {
   const double b = beta_count(std::clamp(degree, 1, tol::kMaxDegree));
-  // The basis rows a solve keeps between its passes (fit_solve.h): up to about 2 b entries of
-  // 28 bytes per point, at most kRowCacheBytes.
-  const double rows = std::min(static_cast<double>(detail::kRowCacheBytes), static_cast<double>(points) * 56 * b);
+  // The basis rows a solve keeps between its passes (fit_solve.h).
+  const double rows = static_cast<double>(detail::row_cache_budget(points, degree));
   const double bytes = kMemoryBase + static_cast<double>(points) * kMemoryPerPoint + rows +
                        static_cast<double>(control_points) * kMemoryPerControlPoint * std::pow(b, 1.75);
   return static_cast<size_t>(std::min(bytes * kMemorySafety, 1e19));
@@ -453,7 +452,7 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
                0);
       spline.control_points() =
           detail::solve_control_points(spline, eval, make_points(), lambda, opt.threads, &solve_times,
-                                       detail::Solver::Split, detail::kRowCacheBytes, &kept_rows);
+                                       detail::Solver::Split, detail::row_cache_budget(N, n), &kept_rows);
       stage["solve"] += seconds_since(ts);
     };
     solve();

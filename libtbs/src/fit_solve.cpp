@@ -34,6 +34,18 @@ void group_by_triangle(std::span<const int> triangle, int triangle_count, std::v
 
 namespace {
 
+// Second and third derivatives of F at interior quadrature points of a domain triangle, as
+// sparse rows over the control points, by central differences of the exact first derivatives
+// (the evaluator gives F, F_u, F_v). The step, 2 % of the sub-triangle's size, is below the
+// distance of the Gauss points from the sub-triangle's edges (a sixth of its heights) for the
+// well-shaped triangles the domain builder makes, so the differences stay inside the triangle
+// and do not reach across a feature edge.
+struct BendSample {
+  BasisRow row[5];  // at x, x + d e_u, x - d e_u, x + d e_v, x - d e_v
+  double delta = 0;
+  double weight = 0;  // quadrature weight times triangle area
+};
+
 // The basis rows of one triangle's points, as the pattern pass computed them, for the
 // assembly pass: point q's row is entries start[q] .. start[q + 1] - 1 (empty for a point
 // the evaluator gives no row: it adds nothing either way). du and dv are kept only when the
@@ -42,9 +54,20 @@ struct RowCache {
   std::vector<int> start, index;
   std::vector<double> value, du, dv;
   bool filled = false;
+  // The triangle's smoothness samples (for_bend_samples), when it has them; without the basis
+  // values, which the smoothness terms do not use.
+  std::vector<BendSample> bend;
+  bool bend_filled = false;
+  size_t bend_bytes() const {
+    size_t b = bend.capacity() * sizeof(BendSample);
+    for (const BendSample& s : bend)
+      for (const BasisRow& r : s.row)
+        b += r.index.capacity() * sizeof(int) + (r.value.capacity() + r.du.capacity() + r.dv.capacity()) * sizeof(double);
+    return b;
+  }
   size_t bytes() const {
     return start.capacity() * sizeof(int) + index.capacity() * sizeof(int) +
-           (value.capacity() + du.capacity() + dv.capacity()) * sizeof(double);
+           (value.capacity() + du.capacity() + dv.capacity()) * sizeof(double) + bend_bytes();
   }
   void release() { *this = RowCache(); }
 };
@@ -66,18 +89,6 @@ struct Local {
   std::vector<double> F;  // fairness: 6 per entry (xx xy xz yy yz zz), side by side
   std::vector<double> rhs;              // m x 3
   std::vector<double> data_diag;        // m, diagonal of the data term alone
-};
-
-// Second and third derivatives of F at interior quadrature points of a domain triangle, as
-// sparse rows over the control points, by central differences of the exact first derivatives
-// (the evaluator gives F, F_u, F_v). The step, 2 % of the sub-triangle's size, is below the
-// distance of the Gauss points from the sub-triangle's edges (a sixth of its heights) for the
-// well-shaped triangles the domain builder makes, so the differences stay inside the triangle
-// and do not reach across a feature edge.
-struct BendSample {
-  BasisRow row[5];  // at x, x + d e_u, x - d e_u, x + d e_v, x - d e_v
-  double delta = 0;
-  double weight = 0;  // quadrature weight times triangle area
 };
 
 // Conjugate gradients on the coupled system stop at this relative residual (the preconditioned
@@ -261,10 +272,20 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
   const int own = beta_count(spline.degree());
   auto bend_level = [&](int t) { return pts.start[t + 1] - pts.start[t] >= own ? 1 : kBendLevel; };
   std::vector<std::vector<int>> support(T), point_support(T);
-  // The pattern pass keeps its basis rows for the assembly pass, triangle by triangle, while
-  // they fit in row_cache_bytes (the rest are computed again); the same rows either way. With
-  // `kept`, triangles take the rows of the previous solve where they are still theirs.
+  // The pattern pass keeps its basis rows (of the points and of the smoothness samples) for
+  // the assembly pass, triangle by triangle, while they fit in row_cache_bytes (the rest are
+  // computed again); the same rows either way. With `kept`, triangles take the rows of the
+  // previous solve where they are still theirs.
   std::vector<RowCache> cache(T);
+  // A triangle's smoothness samples: kept ones, or computed (the same rows either way).
+  auto bend_samples = [&](Scratch& sc, int t, auto&& f) {
+    const RowCache& C = cache[t];
+    if (C.bend_filled) {
+      for (const BendSample& b : C.bend) f(b);
+    } else {
+      for_bend_samples(eval, d, spline.degree(), t, bend_level(t), sc.bend, f);
+    }
+  };
   std::vector<char> reuse(T, 0);
   if (kept && kept->data) reuse = kept->data->reusable(spline, pts, fair);
   size_t reused_bytes = 0;
@@ -316,11 +337,26 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
       S = P;
       if (bends(t)) {
         for (int j : S) sc.where[j] = 0;
-        for_bend_samples(eval, d, spline.degree(), t, bend_level(t), sc.bend, [&](const BendSample& b) {
+        RowCache& C = cache[t];
+        const bool keep = !C.bend_filled && cached_bytes.load(std::memory_order_relaxed) < row_cache_bytes;
+        bend_samples(sc, t, [&](const BendSample& b) {
           for (const BasisRow& r : b.row)
             for (int j : r.index)
               if (sc.where[j] < 0) sc.where[j] = 0, S.push_back(j);
+          if (keep) {
+            C.bend.push_back(b);
+            for (BasisRow& r : C.bend.back().row) r.value = std::vector<double>();
+          }
         });
+        if (keep) {
+          C.bend_filled = true;
+          const size_t bytes = C.bend_bytes();
+          if (cached_bytes.fetch_add(bytes, std::memory_order_relaxed) + bytes > row_cache_bytes) {
+            cached_bytes.fetch_sub(bytes, std::memory_order_relaxed);
+            C.bend = std::vector<BendSample>();
+            C.bend_filled = false;
+          }
+        }
         for (int j : S) sc.where[j] = -1;
         std::sort(S.begin(), S.end());
       }
@@ -407,6 +443,7 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
   // Local systems in parallel, scattered in triangle order (deterministic sums).
   constexpr int kChunk = 128;
   std::vector<Local> locals(kChunk);
+  std::vector<size_t> next_item(tri_start.begin(), tri_start.end() - 1);  // per row: its next triangle
   for (int t0 = 0; t0 < T; t0 += kChunk) {
     const int t1 = std::min(T, t0 + kChunk);
     with_threads(threads, [&] {
@@ -480,7 +517,7 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
           Eigen::MatrixXd& A = sc.A;
           A.resize(static_cast<Eigen::Index>(active) * 64, static_cast<Eigen::Index>(m));  // rows zeroed as used
           Eigen::Index rows = 0;
-          for_bend_samples(eval, d, spline.degree(), t, bend_level(t), sc.bend, [&](const BendSample& b) {
+          bend_samples(sc, t, [&](const BendSample& b) {
             if (rows + active > A.rows()) A.conservativeResize(2 * A.rows(), Eigen::NoChange);
             const double f2 = 1.0 / (2 * b.delta), f4 = 1.0 / (4 * b.delta), f3 = 1.0 / (b.delta * b.delta);
             // Derivative k (0 uu, 1 uv, 2 vv, 3 uuu, 4 uuv, 5 uvv, 6 vvv) from the five rows
@@ -521,24 +558,29 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
         for (size_t a = 0; a < m; ++a) sc.where[L.S[a]] = -1;
       });
     });
-    for (int t = t0; t < t1; ++t) {
-      const Local& L = locals[t - t0];
-      const size_t m = L.S.size();
-      for (size_t a = 0; a < m; ++a) {
-        const int j = L.S[a];
-        for (int c = 0; c < 3; ++c) rhs[3 * static_cast<size_t>(j) + c] += L.rhs[3 * a + c];
-        data_diag[j] += L.data_diag[a];
-        // Columns L.S[a..] are sorted and a subset of row j's columns: merge walk.
-        size_t pos = row_start[j];
-        for (size_t b = a; b < m; ++b) {
-          while (cols[pos] != L.S[b]) ++pos;
-          // The local matrices hold their upper triangle (b >= a).
-          G[pos] += L.G[a * m + b];
-          if (fair)
-            for (int c = 0; c < 6; ++c) F[c][pos] += L.F[(a * m + b) * 6 + c];
+    // Row j takes the chunk's triangles that hold control point j in triangle order (its
+    // items are sorted by triangle): every entry sums in the same order for any thread count.
+    with_threads(threads, [&] {
+      tbb::parallel_for(0, N, [&](int j) {
+        size_t& e = next_item[static_cast<size_t>(j)];
+        for (; e < tri_start[j + 1] && tri_items[e].first < t1; ++e) {
+          const Local& L = locals[tri_items[e].first - t0];
+          const size_t a = static_cast<size_t>(tri_items[e].second), m = L.S.size();
+          if (m == 0) continue;  // an idle triangle: no local system
+          for (int c = 0; c < 3; ++c) rhs[3 * static_cast<size_t>(j) + c] += L.rhs[3 * a + c];
+          data_diag[j] += L.data_diag[a];
+          // Columns L.S[a..] are sorted and a subset of row j's columns: merge walk.
+          size_t pos = row_start[j];
+          for (size_t b = a; b < m; ++b) {
+            while (cols[pos] != L.S[b]) ++pos;
+            // The local matrices hold their upper triangle (b >= a).
+            G[pos] += L.G[a * m + b];
+            if (fair)
+              for (int c = 0; c < 6; ++c) F[c][pos] += L.F[(a * m + b) * 6 + c];
+          }
         }
-      }
-    }
+      });
+    });
   }
 
   if (kept) {

@@ -3,7 +3,10 @@
 
 #include <tbs/evaluator.h>
 #include <tbs/spline.h>
+#include <tbs/tolerances.h>
+#include <tbs/types.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <memory>
 #include <span>
@@ -61,9 +64,17 @@ struct SolveTimes {
 /// points and degree 3, where a row is cheap to compute again.
 inline constexpr size_t kRowCacheBytes = size_t{256} << 20;
 
+/// The row-cache budget of one fit's solves, as the memory model counts it: up to about 2 b
+/// entries of 28 bytes per point (b = beta_count(degree)), at most kRowCacheBytes. The rows of
+/// the smoothness samples share it.
+inline size_t row_cache_budget(size_t points, int degree) {
+  const double b = beta_count(std::clamp(degree, 1, tol::kMaxDegree));
+  return static_cast<size_t>(std::min(static_cast<double>(kRowCacheBytes), static_cast<double>(points) * 56 * b));
+}
+
 /// Basis rows one solve keeps for the next solve of the same fit: the rows of the triangles
 /// whose points and surrounding knots have not changed since are taken as they are (the same
-/// numbers the evaluator would give again), the others computed. Within kRowCacheBytes. Pass
+/// numbers the evaluator would give again), the others computed. Within the solve's budget. Pass
 /// one object to the solves of one fit; it notices a new domain or moved knots by itself.
 class KeptRows {
  public:
