@@ -421,10 +421,13 @@ Region region_from_points(std::span<const Point2> uv, std::vector<std::array<int
     } while (++c != done);
     nn[v->info()] = best;
   });
-  std::vector<double> all;
-  for (const Dt::Vertex_handle& v : vertices) all.push_back(nn[v->info()]);
-  std::nth_element(all.begin(), all.begin() + all.size() / 2, all.end());
-  const double global = all[all.size() / 2];
+  const double global = [&] {
+    std::vector<double> all;
+    all.reserve(vertices.size());
+    for (const Dt::Vertex_handle& v : vertices) all.push_back(nn[v->info()]);
+    std::nth_element(all.begin(), all.begin() + all.size() / 2, all.end());
+    return all[all.size() / 2];
+  }();
   tbb::parallel_for(tbb::blocked_range<size_t>(0, vertices.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
     std::vector<double> ring;
     for (size_t q = range.begin(); q != range.end(); ++q) {
@@ -439,6 +442,7 @@ Region region_from_points(std::span<const Point2> uv, std::vector<std::array<int
       local[v->info()] = std::max(global, ring[ring.size() / 2]);
     }
   });
+  nn = std::vector<double>();  // what the triangulation holds is the peak: free as we go
   // Random samples leave empty circles a few times the local spacing; only larger gaps are
   // outline or holes: a triangle stays if its circumradius is at most 6 times the largest
   // local spacing at its corners (an alpha shape with a local alpha).
@@ -460,6 +464,7 @@ Region region_from_points(std::span<const Point2> uv, std::vector<std::array<int
     // Flat slivers have a large circumradius but short edges: they are not gaps.
     keep[i] = circumradius <= alpha || std::max({la, lb, lc}) <= 0.5 * alpha;
   });
+  local = std::vector<double>();
   // Interior gaps smaller than a disc of about 4 spacings are sampling noise, not holes.
   {
     std::vector<int> seen(faces.size(), 0);
@@ -521,20 +526,21 @@ Region region_from_points(std::span<const Point2> uv, std::vector<std::array<int
     }
     if (!changed) break;
   }
-  std::vector<int> kept_index(faces.size(), -1);
-  for (size_t i = 0; i < faces.size(); ++i)
-    if (keep[i]) {
-      kept_index[i] = static_cast<int>(r.tris.size());
+  // From here a face's info is its index in the region, -1 if it is not kept.
+  for (size_t i = 0; i < faces.size(); ++i) {
+    faces[i]->info() = keep[i] ? static_cast<int>(r.tris.size()) : -1;
+    if (keep[i])
       r.tris.push_back({faces[i]->vertex(0)->info(), faces[i]->vertex(1)->info(), faces[i]->vertex(2)->info()});
-    }
+  }
   if (r.tris.empty()) throw InvalidInput("the parameters (u, v) do not span an area");
   // Edge (t[k], t[k + 1]) of a face is the one opposite its vertex k + 2.
   across.assign(r.tris.size(), {-1, -1, -1});
   tbb::parallel_for(size_t{0}, faces.size(), [&](size_t i) {
-    if (!keep[i]) return;
+    const int f = faces[i]->info();
+    if (f < 0) return;
     for (int k = 0; k < 3; ++k) {
       const Dt::Face_handle g = faces[i]->neighbor((k + 2) % 3);
-      if (!dt.is_infinite(g)) across[static_cast<size_t>(kept_index[i])][static_cast<size_t>(k)] = kept_index[static_cast<size_t>(g->info())];
+      if (!dt.is_infinite(g)) across[static_cast<size_t>(f)][static_cast<size_t>(k)] = g->info();
     }
   });
   return r;
