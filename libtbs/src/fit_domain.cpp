@@ -341,17 +341,14 @@ size_t keep_largest_component(Region& r, std::span<const Point2> uv, Adjacency& 
   }
   if (area.size() <= 1) return 0;
   const int best = static_cast<int>(std::max_element(area.begin(), area.end()) - area.begin());
+  // A kept triangle's neighbours are in its component: renumbered, they stay its neighbours
+  // (taken over where each edge has at most the one neighbour, searched again otherwise).
   Region kept;
+  std::vector<int> renumbered(r.tris.size(), -1);
   for (size_t f = 0; f < r.tris.size(); ++f)
-    if (comp[f] == best) kept.tris.push_back(r.tris[f]);
-  const size_t dropped = r.tris.size() - kept.tris.size();
-  if (manifold) {
-    // A kept triangle's neighbours are in its component: renumbered, they stay its neighbours.
-    std::vector<int> renumbered(r.tris.size(), -1);
-    for (size_t f = 0, next = 0; f < r.tris.size(); ++f)
-      if (comp[f] == best) renumbered[f] = static_cast<int>(next++);
-    std::vector<std::array<int, 3>> across;
-    across.reserve(kept.tris.size());
+    if (comp[f] == best) renumbered[f] = static_cast<int>(kept.tris.size()), kept.tris.push_back(r.tris[f]);
+  std::vector<std::array<int, 3>> across;
+  if (manifold)
     for (size_t f = 0; f < r.tris.size(); ++f)
       if (comp[f] == best) {
         std::array<int, 3> g = adj.across[f];
@@ -359,12 +356,9 @@ size_t keep_largest_component(Region& r, std::span<const Point2> uv, Adjacency& 
           if (q >= 0) q = renumbered[static_cast<size_t>(q)];
         across.push_back(g);
       }
-    r = std::move(kept);
-    adj = adjacency(r, uv.size(), std::move(across));
-  } else {
-    r = std::move(kept);
-    adj = adjacency(r, uv.size());
-  }
+  const size_t dropped = r.tris.size() - kept.tris.size();
+  r = std::move(kept);
+  adj = manifold ? adjacency(r, uv.size(), std::move(across)) : adjacency(r, uv.size());
   return dropped;
 }
 

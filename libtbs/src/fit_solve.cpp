@@ -344,8 +344,11 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
             for (int j : r.index)
               if (sc.where[j] < 0) sc.where[j] = 0, S.push_back(j);
           if (keep) {
-            C.bend.push_back(b);
-            for (BasisRow& r : C.bend.back().row) r.value = std::vector<double>();
+            BendSample& k = C.bend.emplace_back();
+            k.delta = b.delta;
+            k.weight = b.weight;
+            for (int q = 0; q < 5; ++q)
+              k.row[q] = {b.row[q].index, {}, b.row[q].du, b.row[q].dv};
           }
         });
         if (keep) {
@@ -566,7 +569,6 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
         for (; e < tri_start[j + 1] && tri_items[e].first < t1; ++e) {
           const Local& L = locals[tri_items[e].first - t0];
           const size_t a = static_cast<size_t>(tri_items[e].second), m = L.S.size();
-          if (m == 0) continue;  // an idle triangle: no local system
           for (int c = 0; c < 3; ++c) rhs[3 * static_cast<size_t>(j) + c] += L.rhs[3 * a + c];
           data_diag[j] += L.data_diag[a];
           // Columns L.S[a..] are sorted and a subset of row j's columns: merge walk.

@@ -107,45 +107,45 @@ std::vector<Vector3> estimate_normals(std::span<const Point3> positions, std::sp
   std::vector<std::uint32_t> unique_of(n);
   std::vector<std::uint32_t> first_of;  // a point at each unique position
   {
+    const auto key = [&](std::size_t i) {
+      Point3 k = positions[i];
+      for (int c = 0; c < 3; ++c)
+        if (k[c] == 0.0) k[c] = 0.0;  // +0 and -0 are one position
+      return k;
+    };
     struct Entry {
       Point3 p;
       std::uint32_t i;
     };
     std::vector<Entry> sorted(n);
-    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-      Point3 key = positions[i];
-      for (int c = 0; c < 3; ++c)
-        if (key[c] == 0.0) key[c] = 0.0;  // +0 and -0 are one position
-      sorted[i] = {key, static_cast<std::uint32_t>(i)};
-    });
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) { sorted[i] = {key(i), static_cast<std::uint32_t>(i)}; });
     tbb::parallel_sort(sorted.begin(), sorted.end(), [](const Entry& a, const Entry& b) {
       for (int c = 0; c < 3; ++c)
         if (a.p[c] != b.p[c]) return a.p[c] < b.p[c];
       return a.i < b.i;
     });
-    // first[i]: the first copy of point i's position; is_first marks those.
+    // first[i]: the first copy of point i's position (first[i] <= i).
     std::vector<std::uint32_t> first(n);
-    std::vector<char> is_first(n, 0);
     std::size_t groups = 0;
     for (std::size_t j = 0; j < n; ++groups) {
       std::size_t e = j + 1;
       while (e < n && sorted[e].p == sorted[j].p) ++e;
-      is_first[sorted[j].i] = 1;
       for (std::size_t q = j; q < e; ++q) first[sorted[q].i] = sorted[j].i;
       j = e;
     }
     sorted = std::vector<Entry>();
     unique.reserve(groups);
     first_of.reserve(groups);
-    std::vector<std::uint32_t> id_of_first(n);
-    for (std::size_t i = 0; i < n; ++i)
-      if (is_first[i]) {
-        id_of_first[i] = static_cast<std::uint32_t>(unique.size());
-        const Point3& p = positions[i];
-        unique.emplace_back(p.x() == 0.0 ? 0.0 : p.x(), p.y() == 0.0 ? 0.0 : p.y(), p.z() == 0.0 ? 0.0 : p.z());
-        first_of.push_back(static_cast<std::uint32_t>(i));
+    for (std::size_t i = 0; i < n; ++i) {
+      if (first[i] != i) {
+        unique_of[i] = unique_of[first[i]];
+        continue;
       }
-    for (std::size_t i = 0; i < n; ++i) unique_of[i] = id_of_first[first[i]];
+      unique_of[i] = static_cast<std::uint32_t>(unique.size());
+      const Point3 k = key(i);
+      unique.emplace_back(k.x(), k.y(), k.z());
+      first_of.push_back(static_cast<std::uint32_t>(i));
+    }
   }
   if (unique.size() < static_cast<std::size_t>(kMinNeighbours))
     throw InvalidInput("estimate_normals: " + std::to_string(unique.size()) +
