@@ -12,7 +12,7 @@ it, the share of its area that the flattened mesh covers, and how far the data i
 there: the largest angle between the normals of two mesh faces (of the flattened, possibly
 subdivided mesh) whose parameter centroids lie in the triangle. A share near 0 is a fold in the
 margin: the part of the domain between the outline the domain builder simplifies and offsets
-and the data (fit_domain.cpp), where no point holds the surface. Then the totals, and the
+and the data (fit_outline.cpp), where no point holds the surface. Then the totals, and the
 share of the whole domain that the mesh leaves uncovered. docs/benchmarks.md#where-the-folds-are.
 """
 import argparse

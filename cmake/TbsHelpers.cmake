@@ -23,3 +23,18 @@ function(tbs_add_library name)
   set_target_properties(tbs_${name} PROPERTIES EXPORT_NAME ${name} POSITION_INDEPENDENT_CODE ON)
   tbs_target_defaults(tbs_${name})
 endfunction()
+
+# tbs_add_cgal_sources(<target> SOURCES ... LIBRARIES ...): compiles the sources of a tbs
+# library that include CGAL as an object library of their own and adds them to <target>.
+# CGAL's exact predicates need -frounding-math, which CGAL::CGAL adds to every file it is
+# linked to; this way only the files that call CGAL get it, and the evaluator's hot loops do
+# not. LIBRARIES: what those sources need besides CGAL (their usage requirements only).
+function(tbs_add_cgal_sources target)
+  cmake_parse_arguments(ARG "" "" "SOURCES;LIBRARIES" ${ARGN})
+  add_library(${target}_cgal OBJECT ${ARG_SOURCES})
+  target_include_directories(${target}_cgal PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/include ${TBS_INTERNAL_DIR})
+  target_link_libraries(${target}_cgal PRIVATE CGAL::CGAL ${ARG_LIBRARIES})
+  set_target_properties(${target}_cgal PROPERTIES POSITION_INDEPENDENT_CODE ON)
+  tbs_target_defaults(${target}_cgal)
+  target_sources(${target} PRIVATE $<TARGET_OBJECTS:${target}_cgal>)
+endfunction()

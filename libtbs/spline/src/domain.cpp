@@ -1,3 +1,6 @@
+// tbs::Domain (domain.h): a planar triangulation checked for validity, with its edges,
+// boundary loops, holes and feature edges.
+
 #include <tbs/domain.h>
 #include <tbs/errors.h>
 #include <tbs/predicates.h>

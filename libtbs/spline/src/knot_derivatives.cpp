@@ -1,3 +1,6 @@
+// Derivatives of the surface with respect to one knot (knot_derivatives.h), through the
+// reference evaluator.
+
 #include <tbs/errors.h>
 #include <tbs/knot_derivatives.h>
 #include <tbs/reference.h>

@@ -1,3 +1,6 @@
+// Plain-recursion evaluation of simplex splines and of the surface (reference.h): the
+// independent computation the Evaluator is tested against.
+
 #include <tbs/reference.h>
 
 #include <algorithm>

@@ -1,3 +1,7 @@
+// tbs::Evaluator (evaluator.h): the spline's basis functions as a graph of simplex-spline
+// recurrences per domain triangle, evaluated with value and derivatives; point location on a
+// box grid under the half-open rule.
+
 #include <tbs/errors.h>
 #include <tbs/evaluator.h>
 #include <tbs/reference.h>

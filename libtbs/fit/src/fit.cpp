@@ -1,3 +1,6 @@
+// tbs::fit (fit.h): the paper's Algorithm 1, the refinement loop around the domain, the
+// solve and the knot moves, with the options' checks, the memory model, progress and the report.
+
 #include <tbs/errors.h>
 #include <tbs/evaluator.h>
 #include <tbs/fit.h>

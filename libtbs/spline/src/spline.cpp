@@ -1,3 +1,6 @@
+// tbs::Spline (spline.h): degree, domain, knots and the shared control points, with the
+// control-point map and the blossom points of each triangle.
+
 #include <tbs/errors.h>
 #include <tbs/spline.h>
 #include <tbs/tolerances.h>

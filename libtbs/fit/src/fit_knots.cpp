@@ -1,3 +1,7 @@
+// OptimizeKnot (paper section 4.3, fit_knots.h): each vertex's knots moved by a pattern search,
+// with the control points of its star solved again on the local points; colour classes of
+// vertices far enough apart run in parallel, with the same result for any thread count.
+
 #include "fit_knots.h"
 
 #include "thread_arena.h"

@@ -1,3 +1,6 @@
+// The control-point sub-problem (paper section 4.3, fit_solve.h): the points' basis rows, the
+// fairness and smoothness terms, assembled into one sparse SPD system and solved by CHOLMOD.
+
 #include "fit_solve.h"
 #include "thread_arena.h"
 

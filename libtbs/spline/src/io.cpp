@@ -1,3 +1,6 @@
+// .tbs files (io.h): parsing with a message that names the JSON field, writing in canonical
+// form, and the atomic output every writer of tbs goes through.
+
 #include <tbs/errors.h>
 #include <tbs/io.h>
 #include <tbs/knots.h>

@@ -1,3 +1,6 @@
+// Knot clouds (knots.h): the knot conditions and their check, Traas's default knots, the
+// servers of feature edges and the continuity across domain edges.
+
 #include <tbs/errors.h>
 #include <tbs/knots.h>
 #include <tbs/predicates.h>

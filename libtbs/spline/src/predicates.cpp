@@ -1,3 +1,5 @@
+// The exact orientation predicate behind the half-open rule (predicates.h), through CGAL.
+
 #include <tbs/predicates.h>
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
