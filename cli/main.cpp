@@ -14,6 +14,7 @@
 #include <climits>
 #include <cstdio>
 #include <string>
+#include <vector>
 #include <exception>
 #include <iostream>
 #include <optional>
@@ -22,6 +23,42 @@ namespace {
 std::string lower_ascii(std::string s) {
   for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return s;
+}
+
+// The options that several subcommands share, each defined once. Where the subcommands'
+// help texts differ, the caller completes it.
+
+// The .tbs file a subcommand reads (positional).
+CLI::Option* add_tbs_input(CLI::App* cmd, const std::string& name, std::string& file) {
+  return cmd->add_option(name, file, "The .tbs file")->required();
+}
+
+// --threads, -t: bounds every parallel loop (main() sets TBB's limit from it too).
+CLI::Option* add_threads(CLI::App* cmd, int& threads, const std::string& more = "") {
+  return cmd->add_option("--threads,-t", threads, "Worker threads (0 = all cores)" + more)
+      ->check(CLI::NonNegativeNumber);
+}
+
+// --quiet, -q: no progress on stderr (the summary still goes to stdout).
+CLI::Option* add_quiet(CLI::App* cmd, bool& quiet) {
+  return cmd->add_flag("--quiet,-q", quiet, "No progress messages on stderr");
+}
+
+// --report FILE: a JSON report of the run, written atomically.
+CLI::Option* add_report(CLI::App* cmd, std::string& report, const std::string& help) {
+  return cmd->add_option("--report", report, help);
+}
+
+// --units: a length unit of the ones .tbs files record (docs/format.md), or also unitless.
+CLI::Option* add_units(CLI::App* cmd, std::string& units, const std::string& help, bool unitless) {
+  std::vector<std::string> allowed{"mm", "cm", "m", "um", "in", "ft"};
+  if (unitless) allowed.emplace_back("unitless");
+  return cmd->add_option("--units", units, help)->check(CLI::IsMember(allowed));
+}
+
+// --max-points: a scan with more points is refused before it is read.
+CLI::Option* add_max_points(CLI::App* cmd, size_t& max_points, const std::string& help) {
+  return cmd->add_option("--max-points", max_points, help)->check(CLI::PositiveNumber)->capture_default_str();
 }
 }  // namespace
 
@@ -52,20 +89,19 @@ int main(int argc, char** argv) {
   auto* info_cmd = app.add_subcommand(
       "info", "Print a JSON summary of a .tbs spline: sizes, bounding boxes, knot conditions, "
               "continuity at features. Exit code 3 if the knot conditions fail.");
-  info_cmd->add_option("file", info.file, "The .tbs file")->required();
+  add_tbs_input(info_cmd, "file", info.file);
 
   EvalOptions eval;
   auto* eval_cmd = app.add_subcommand(
       "eval", "Evaluate a .tbs spline at parameter points: reads one \"u v\" pair per line "
               "(blank lines and lines starting with # are skipped) and writes \"x y z\" per "
               "point, in input order.");
-  eval_cmd->add_option("file", eval.file, "The .tbs file")->required();
+  add_tbs_input(eval_cmd, "file", eval.file);
   eval_cmd->add_option("--input,-i", eval.input, "Read points from this file instead of stdin");
   eval_cmd->add_flag("--normals,-n", eval.normals, "Append the unit normal \"nx ny nz\"");
   eval_cmd->add_flag("--derivatives,-d", eval.derivatives,
                      "Append the partial derivatives \"Fu_x Fu_y Fu_z Fv_x Fv_y Fv_z\"");
-  eval_cmd->add_option("--threads,-t", eval.threads, "Worker threads (0 = all cores)")
-      ->check(CLI::NonNegativeNumber);
+  add_threads(eval_cmd, eval.threads);
   eval_cmd->add_option("--outside", eval.outside,
                        "A point outside the domain: error (exit 3, nothing written), nan (a line of nan "
                        "values in its place) or skip (no line); nan and skip warn with their count")
@@ -119,13 +155,11 @@ int main(int argc, char** argv) {
                       "Most knot optimisation passes per round; they stop early when one gains "
                       "less than 1 % (0 = fixed knots)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
-  fit_cmd->add_option("--units", fit.units, "Length unit of the scan: mm, cm, m, um, in, ft, unitless")
-      ->check(CLI::IsMember({"mm", "cm", "m", "um", "in", "ft", "unitless"}))->capture_default_str();
-  fit_cmd->add_option("--report", fit.report, "Also write the fit report (JSON) here");
-  fit_cmd->add_option("--threads,-t", fit.fit.threads, "Worker threads (0 = all cores); the result "
-                                                   "does not depend on it")
-      ->check(CLI::NonNegativeNumber);
-  fit_cmd->add_flag("--quiet,-q", fit.quiet, "No progress messages on stderr");
+  add_units(fit_cmd, fit.units, "Length unit of the scan: mm, cm, m, um, in, ft, unitless", true)
+      ->capture_default_str();
+  add_report(fit_cmd, fit.report, "Also write the fit report (JSON) here");
+  add_threads(fit_cmd, fit.fit.threads, "; the result does not depend on it");
+  add_quiet(fit_cmd, fit.quiet);
   fit_cmd->add_option("--component", fit.component,
                       "Scans without (u, v): the mesh component to fit, 1 = the largest (default), "
                       "numbered by decreasing face count")
@@ -138,10 +172,9 @@ int main(int argc, char** argv) {
                       "parts of the surface tenfold on average; mean-value coordinates if LSCM folds), "
                       "lscm (the conformal map alone), or mean-value")
       ->check(CLI::IsMember({"auto", "lscm", "mean-value"}))->capture_default_str();
-  fit_cmd->add_option("--max-points", fit.max_points,
-                      "Refuse scans with more points than this, before reading them (a fit takes about "
-                      "1 KB of memory per point)")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+  add_max_points(fit_cmd, fit.max_points,
+                 "Refuse scans with more points than this, before reading them (a fit takes about "
+                 "1 KB of memory per point)");
   fit_cmd->add_option("--max-memory", fit.max_memory,
                       "Memory limit for the fit, e.g. 8G or 512M (0 = the memory available when tbs starts, "
                       "within a container's limit): a fit estimated to need more is refused before it starts, "
@@ -179,16 +212,15 @@ int main(int argc, char** argv) {
                  "mesh (.glb, .gltf) with normals, (u, v) and domain-triangle ids, or OBJ / PLY. Or an "
                  "error map of the scan (--points) as OpenEXR (.exr) with a PNG preview beside it. A "
                  "summary goes to stdout.");
-  convert_cmd->add_option("input", convert.input, "The .tbs file")->required();
+  add_tbs_input(convert_cmd, "input", convert.input);
   convert_cmd->add_option("output", convert.output, "The file to write (format from the extension)")->required();
   convert_cmd->add_option("--format", convert.format, "Output format, overriding the extension: step, iges, glb, gltf, obj, ply, exr")
       ->check(CLI::IsMember({"step", "stp", "iges", "igs", "glb", "gltf", "obj", "ply", "exr"}, CLI::ignore_case));
   convert_cmd->add_option("--points", convert.points,
                           "Error maps (exr) and --color-by error: the scan the spline was fitted to (with "
                           "parameters u v); default: the points stored by 'tbs fit --keep-points'");
-  convert_cmd->add_option("--max-points", convert.max_points,
-                          "Refuse a --points scan with more points than this, before reading it")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+  add_max_points(convert_cmd, convert.max_points,
+                 "Refuse a --points scan with more points than this, before reading it");
   convert_cmd->add_option("--color-by", convert.color_by,
                           "glTF meshes: none, or error (a COLOR_0 heat map of the points' error, blue 0 to "
                           "red at the fit tolerance or the largest error; needs the points)")
@@ -241,19 +273,18 @@ int main(int argc, char** argv) {
                           "Triangle patches and exact pieces: how a triangle becomes B-spline faces: quads (three, none degenerate) "
                           "or degenerate (one, with a collapsed edge)")
       ->check(CLI::IsMember({"quads", "degenerate"}))->capture_default_str();
-  convert_cmd->add_option("--units", convert.units,
-                          "Length unit written to the file: mm, cm, m, um, in, ft (default: the .tbs "
-                          "units; mm if it has none). Coordinates are not scaled.")
-      ->check(CLI::IsMember({"mm", "cm", "m", "um", "in", "ft"}));
+  add_units(convert_cmd, convert.units,
+            "Length unit written to the file: mm, cm, m, um, in, ft (default: the .tbs "
+            "units; mm if it has none). Coordinates are not scaled.",
+            false);
   convert_cmd->add_option("--product-name", convert.product_name,
                           "Product name in the file (default: the output's file name); STEP and IGES get it in "
                           "ASCII, other characters as _");
-  convert_cmd->add_option("--report", convert.report,
-                          "Write a JSON report: faces, regions or patches, measured deviations, CAD "
-                          "tolerance and where it came from, seconds per stage, file size");
-  convert_cmd->add_option("--threads,-t", convert.threads, "Worker threads (0 = all cores)")
-      ->check(CLI::NonNegativeNumber);
-  convert_cmd->add_flag("--quiet,-q", convert.quiet, "No progress messages on stderr");
+  add_report(convert_cmd, convert.report,
+             "Write a JSON report: faces, regions or patches, measured deviations, CAD "
+             "tolerance and where it came from, seconds per stage, file size");
+  add_threads(convert_cmd, convert.threads);
+  add_quiet(convert_cmd, convert.quiet);
 
   try {
     app.parse(argc, argv);
