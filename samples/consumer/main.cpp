@@ -1,82 +1,59 @@
-// A program outside the tbs source tree that uses the installed library: it fits a generated
-// point set, evaluates and tessellates the spline, and writes a STEP file.
+// A program outside the tbs source tree that only reads and evaluates splines, as a CAM tool
+// would: it links tbs::spline alone (samples/consumer/CMakeLists.txt).
 //
-//   consumer [OUT.step]
+//   consumer FILE.tbs
 //
-// Built by samples/consumer/CMakeLists.txt against an installed tbs (find_package(tbs)); the
-// Install.ConsumerUsesTheInstalledPackage test installs tbs into a temporary prefix, builds
-// this program and runs it. Exit status 0 when the fit, the evaluation and the export agree
-// with the known surface.
-#include <tbs/cad_export.h>
-#include <tbs/cad_regions.h>
+// Reads the spline, evaluates it at the centroid of every domain triangle with the fast
+// Evaluator and at a few of them with the plain-recursion reference evaluator, and runs the
+// shape check (folds, stretch). Exit status 0 when both evaluators agree, 1 otherwise or on
+// an error (the message says what and where).
 #include <tbs/errors.h>
 #include <tbs/evaluator.h>
-#include <tbs/fit.h>
-#include <tbs/scan.h>
-#include <tbs/tessellate.h>
+#include <tbs/io.h>
+#include <tbs/reference.h>
+#include <tbs/shape_check.h>
 
-#include <cmath>
+#include <algorithm>
 #include <cstdio>
 #include <string>
 
-namespace {
-
-// The known surface, millimetres, over (u, v) in [0, 1]^2.
-tbs::Point3 surface(double u, double v) {
-  return {100 * u, 80 * v, 12 * std::sin(3 * u) * std::cos(2 * v)};
-}
-
-}  // namespace
-
 int main(int argc, char** argv) {
-  const std::string out = argc > 1 ? argv[1] : "consumer.step";
+  if (argc != 2) {
+    std::fprintf(stderr, "usage: consumer FILE.tbs\n");
+    return 1;
+  }
   try {
-    // 1. Points with parameters (a scan would come from tbs::read_scan()).
-    tbs::Scan scan;
-    const int n = 60;
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        const double u = (i + 0.5) / n, v = (j + 0.5) / n;
-        scan.positions.push_back(surface(u, v));
-        scan.uv.emplace_back(u, v);
+    const tbs::SplineFile file = tbs::read_tbs(argv[1]);
+    const tbs::Spline& spline = file.spline;
+    const tbs::Domain& domain = spline.domain();
+    const tbs::Evaluator evaluator(spline);
+    std::printf("%s: degree %d, %d domain triangles, units %s\n", argv[1], spline.degree(),
+                domain.triangle_count(), file.units.c_str());
+
+    // The fast evaluator at every centroid; the reference at every 16th (it visits every
+    // triangle for each point).
+    double largest_difference = 0, largest_value = 0;
+    int compared = 0;
+    for (int t = 0; t < domain.triangle_count(); ++t) {
+      const auto& tri = domain.triangle(t);
+      const tbs::Point2 c = (domain.vertex(tri[0]) + domain.vertex(tri[1]) + domain.vertex(tri[2])) / 3;
+      const tbs::Point3 fast = evaluator.value(c);
+      largest_value = std::max(largest_value, fast.cwiseAbs().maxCoeff());
+      if (t % 16 == 0) {
+        const tbs::Point3 slow = tbs::reference::value_degree_n(spline, tbs::Perturbation::standard(c));
+        largest_difference = std::max(largest_difference, (fast - slow).norm());
+        ++compared;
       }
+    }
+    std::printf("evaluated at %d centroids; at %d of them the reference evaluator differs by %.2e "
+                "(values up to %.3g)\n",
+                domain.triangle_count(), compared, largest_difference, largest_value);
 
-    // 2. Fit, reporting progress (a GUI would update a progress bar here).
-    tbs::FitOptions options;
-    options.degree = 3;
-    options.tolerance = 1e-4;
-    options.progress = [](const tbs::FitProgress& p) {
-      std::printf("  %-8s %3.0f %%  %s\n", p.stage.c_str(), 100 * p.fraction, p.message.c_str());
-    };
-    const tbs::FitResult fit = tbs::fit(scan, options);
-    std::printf("fit: %zu points, %zu domain triangles, %zu control points, max error %.2e, %s\n",
-                fit.report.points, fit.report.domain_triangles, fit.report.control_points,
-                fit.report.max_error, fit.report.converged ? "converged" : "not converged");
-
-    // 3. Evaluate inside the domain and compare with the known surface.
-    const tbs::Evaluator evaluator(fit.spline);
-    const tbs::Point3 p = evaluator.value(tbs::Point2(0.5, 0.5));
-    const double miss = (p - surface(0.5, 0.5)).norm();
-    std::printf("F(0.5, 0.5) = (%.4f, %.4f, %.4f), %.2e mm from the known surface\n", p.x(), p.y(), p.z(),
-                miss);
-
-    // 4. Tessellate.
-    const tbs::Mesh mesh = tbs::tessellate(fit.spline);
-    std::printf("mesh: %zu vertices, %zu triangles\n", mesh.positions.size(), mesh.faces.size());
-
-    // 5. Region faces (one trimmed B-spline face per smooth region), written as STEP.
-    tbs::CadRegionOptions region_options;
-    region_options.tolerance = 1e-5;
-    const tbs::CadRegions regions = tbs::make_cad_regions(fit.spline, region_options);
-    tbs::CadExportOptions export_options;
-    export_options.product_name = "consumer sample";
-    const tbs::CadExportReport step = tbs::write_step(out, regions, export_options);
-    std::printf("%s: %zu faces, %zu shell(s), %zu free edges\n", out.c_str(), step.faces, step.shells,
-                step.free_edges);
-
-    const bool ok = fit.report.converged && miss < 0.02 && !mesh.faces.empty() && step.shells == 1;
-    return ok ? 0 : 1;
-  } catch (const tbs::Error& e) {  // InvalidInput, IoError, SolverError: each says what to do
+    const tbs::ShapeCheck shape = tbs::check_shape(spline, evaluator);
+    std::printf("shape: %zu folded triangles, max_stretch %.3g\n", shape.folded_triangles.size(),
+                shape.max_stretch);
+    return largest_difference <= 1e-9 * std::max(1.0, largest_value) ? 0 : 1;
+  } catch (const tbs::Error& e) {  // InvalidInput, IoError: each says what to do
     std::fprintf(stderr, "consumer: %s\n", e.what());
     return 1;
   }
