@@ -335,7 +335,6 @@ void check_round_trip(const SplineFile& file, const FitResult& r, const std::str
   }
 }
 
-// Fits one scan with parameters and writes the .tbs, the report and the exports.
 // Fits one scan with parameters and writes the .tbs, the report and the exports. A flattened
 // coarse mesh whose vertices alone cannot be fitted within the control-point budget is
 // subdivided (`densify`, which replaces *pscan) and fitted again.
@@ -561,7 +560,9 @@ int run_fit(const FitCommandOptions& given) {
     // One more subdivision than now (each about quadruples the points), more up to --min-points.
     dense.min_points = std::max(o.min_points, 2 * points);
     p = parameterize_scan(scan, dense);
-    return p.report.subdivisions > 0;
+    // Subdivision stops at 4 levels: a mesh that already has them gains no point, and fitting
+    // it again would give the same fit forever.
+    return p.scan.positions.size() > points;
   };
   ParameterizedScan first = parameterize_scan(scan, po);
   if (!o.all_components)

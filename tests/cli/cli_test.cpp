@@ -40,11 +40,12 @@ fs::path temp_dir() {
   return p;
 }
 
-Result run(const std::string& args, const std::string& stdin_text = "") {
+// Runs `tbs ARGS` (or ARGS itself, a whole command, when with_exe is false).
+Result run(const std::string& args, const std::string& stdin_text = "", bool with_exe = true) {
   const fs::path dir = temp_dir();
   const fs::path in = dir / "stdin.txt", out = dir / "stdout.txt", err = dir / "stderr.txt";
   std::ofstream(in) << stdin_text;
-  const std::string cmd = std::string(TBS_EXE) + " " + args + " < '" + in.string() + "' > '" +
+  const std::string cmd = (with_exe ? std::string(TBS_EXE) + " " : std::string()) + args + " < '" + in.string() + "' > '" +
                           out.string() + "' 2> '" + err.string() + "'";
   const int status = std::system(cmd.c_str());
   Result r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_file(out.string()), read_file(err.string())};
@@ -369,6 +370,33 @@ TEST(CliFit, MeshWithoutParametersIsFlattenedAndFitted) {
   r = run("fit '" + in.string() + "' -o '" + out.string() + "' --tolerance 1e-6 --max-control-points 300 --min-points 0 -q");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(r.out.find("subdivided"), std::string::npos) << r.out;
+}
+
+// A closed mesh so coarse (a cube of 12 triangles) that even its fourth subdivision cannot be
+// fitted within the control-point budget: subdivision stops at 4 levels, so the fit must end
+// there with the best it has, not subdivide "again" (to the same mesh) forever. `timeout`
+// turns a hang into exit code 124.
+TEST(CliFit, CoarseMeshStopsSubdividingAtTheLastLevel) {
+  const fs::path dir = temp_dir();
+  const fs::path in = dir / "cube.off", out = dir / "cube.tbs", report = dir / "cube.json";
+  std::ofstream(in) << "OFF\n8 12 0\n-1 -1 -1\n1 -1 -1\n1 1 -1\n-1 1 -1\n-1 -1 1\n1 -1 1\n1 1 1\n-1 1 1\n"
+                       "3 0 2 1\n3 0 3 2\n3 4 5 6\n3 4 6 7\n3 0 1 5\n3 0 5 4\n"
+                       "3 1 2 6\n3 1 6 5\n3 2 3 7\n3 2 7 6\n3 3 0 4\n3 3 4 7\n";
+  const Result r = run("timeout 300 " + std::string(TBS_EXE) + " fit '" + in.string() + "' -o '" + out.string() +
+                           "' --report '" + report.string() + "'",
+                       "", /*with_exe=*/false);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("subdivided         4 x 1-to-4"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("converged          no"), std::string::npos) << r.out;
+  // Fitted again at most once per added level, never twice at the same point count.
+  size_t again = 0;
+  for (size_t at = r.err.find("fitting the subdivided mesh"); at != std::string::npos;
+       at = r.err.find("fitting the subdivided mesh", at + 1))
+    ++again;
+  EXPECT_LE(again, 4u) << r.err;
+  const json rep = json::parse(read_file(report.string()));
+  EXPECT_FALSE(rep["converged"].get<bool>());
+  EXPECT_TRUE(fs::exists(out));
 }
 
 TEST(CliFit, ComponentsOneOrAll) {
