@@ -175,7 +175,9 @@ size_t cut_along_seam(Mesh3& m) {
   const int t = dijkstra(s, pred);
   std::vector<int> path;
   for (int v = t; v >= 0; v = pred[v]) path.push_back(v);
-  if (path.size() < 3) throw InvalidInput("the closed surface is too small to cut open along a seam");
+  if (path.size() < 3)
+    throw InvalidInput("the closed surface is too small to cut open along a seam (its two farthest vertices "
+                       "are neighbours); give a finer mesh of it, or an open one with parameters (u, v)");
   // Inner path vertices: the faces from (p -> v) around v to (v -> q), on the path's left, get
   // a copy of v. All fans are found on the uncut mesh first.
   std::vector<std::vector<int>> fans(path.size());

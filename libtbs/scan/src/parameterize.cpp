@@ -166,7 +166,11 @@ ParameterizedScan parameterize_scan(const Scan& scan, const ParameterizeOptions&
     if (!o.cut_closed)
       throw InvalidInput(name + ": " + found + ": the surface is closed; cut it open into a disk, or allow a seam");
     say("cutting the closed surface open along a seam");
-    rep.seam_edges = cut_along_seam(part);
+    try {
+      rep.seam_edges = cut_along_seam(part);
+    } catch (const InvalidInput& e) {
+      throw InvalidInput(name + ": " + found + ": " + e.what());
+    }
   }
 
   std::vector<P2> uv = flatten(part, o, rep);
