@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""FreeCAD's ReverseEngineering.approxSurface as a peer in bench/compare.sh.
+"""FreeCAD's ReverseEngineering.approxSurface as a peer in bench/run.py.
 
   /usr/bin/python3 bench/freecad_approx.py POINTS.xyz OUT.brep POLES [DEGREE]
 
