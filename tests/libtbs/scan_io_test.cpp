@@ -479,12 +479,57 @@ TEST(ScanErrors, OffErrors) {
   expect_error(write("limit.off", "OFF\n2000000000 0 0\n"), "the limit is 50000000");
   expect_error(write("bytes.off", "OFF\n4000 0 0\n0 0 0\n"), "the file is truncated");
   expect_error(write("empty.off", "OFF\n0 0 0\n"), "no points");
-  // Variants CGAL 5.5's soup reader gets wrong are refused.
+  // Variants CGAL 5.5's soup reader gets wrong, and that tbs does not read itself, are refused.
   const std::string binary_off("OFF BINARY\n\0\0\0\3\0\0\0\1\0\0\0\0", 23);
   for (const std::string& v :
        {std::string("STOFF\n3 1 0\n0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\n3 0 1 2\n"),
-        std::string("COFF\n3 1 0\n0 0 0 1 1\n1 0 0 1 1\n0 1 0 1 1\n3 0 1 2 1 1\n"), binary_off})
-    expect_error(write("variant.off", v), "line 1: binary OFF and OFF with colours");
+        std::string("C4OFF\n3 1 0\n0 0 0 1 1\n1 0 0 1 1\n0 1 0 1 1\n3 0 1 2 1 1\n"), binary_off})
+    expect_error(write("variant.off", v), "line 1: binary OFF and OFF with texture coordinates");
+}
+
+// COFF, as MeshLab and CGAL's demo data write it: every vertex line ends with a colour of 1, 3
+// or 4 numbers (integers or fractions), faces may carry one too, comments and blank lines
+// anywhere. tbs reads the positions (and CNOFF's normals) and skips the colours: the same scan
+// as the plain OFF without them.
+TEST(ScanIo, OffWithColoursReadsAsWithout) {
+  const Scan plain = read_scan(write("plain.off",
+                                     "OFF\n5 3 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0.25\n2 2 2\n"
+                                     "4 0 1 2 3\n3 0 0 1\n3 1 4 2\n"));
+  const Scan coloured = read_scan(write("coloured.off",
+                                        "# exported\nCOFF\n5 3 0\n\n0 0 0 192 192 192 255\n"
+                                        "1 0 0 0.9 0 0 # red\n1 1 0 7\n0 1 0.25 0 0 0.9\n"
+                                        "2 2 2 1 2 3 4\n\n4 0 1 2 3 0.9 0 0\n3 0 0 1\n3 1 4 2 255 0 0 255\n"));
+  EXPECT_EQ(coloured.positions, plain.positions);
+  EXPECT_EQ(coloured.triangles, plain.triangles);
+  EXPECT_EQ(coloured.degenerate_faces, plain.degenerate_faces);
+  EXPECT_FALSE(coloured.has_normals());
+  // Counts and data on one line after the keyword; normals before the colour.
+  const Scan normals = read_scan(write(
+      "cnoff.off", "CNOFF 3 1 0\n0 0 0 0 0 2 1 1 1\n1 0 0 0 3 4 1 1 1\n0 1 0 1 0 0 1 1 1\n3 0 1 2\n"));
+  EXPECT_EQ(normals.normals, (std::vector<Vector3>{{0, 0, 1}, {0, 0.6, 0.8}, {1, 0, 0}}));
+  EXPECT_EQ(normals.triangles, (std::vector<Tri>{{0, 1, 2}}));
+}
+
+TEST(ScanErrors, OffWithColoursErrors) {
+  const std::string v3 = "0 0 0 1 1 1\n1 0 0 1 1 1\n0 1 0 1 1 1\n";
+  expect_error(write("c_short_vertex.off", "COFF\n3 1 0\n0 0 0 1 1 1\n1 0\n0 1 0 1 1 1\n3 0 1 2\n"),
+               "line 4: vertex 1 has 2 values; a COFF vertex is x y z and then its colour");
+  expect_error(write("c_nan.off", "COFF\n3 1 0\n0 0 0 1 1 1\n1 nan 0 1 1 1\n0 1 0 1 1 1\n3 0 1 2\n"),
+               "line 4: y is nan");
+  expect_error(write("c_text.off", "COFF\n3 1 0\n0 0 0 1 1 1\n1 x 0 1 1 1\n0 1 0 1 1 1\n3 0 1 2\n"),
+               "line 4: value 2 'x' is not a number");
+  expect_error(write("c_range.off", "COFF\n3 1 0\n" + v3 + "3 0 1 9\n"),
+               "face 0: corner 2 refers to vertex 9, but the vertices are numbered 0 to 3 - 1");
+  expect_error(write("c_count.off", "COFF\n3 1 0\n" + v3 + "-3 0 1 2\n"),
+               "line 6: face 0: the corner count '-3' is not a whole number");
+  expect_error(write("c_few.off", "COFF\n3 1 0\n" + v3 + "4 0 1 2\n"),
+               "line 6: face 0 announces 4 corners but gives 3");
+  expect_error(write("c_fraction.off", "COFF\n3 1 0\n" + v3 + "3 0 1.5 2\n"),
+               "line 6: face 0: corner 1 '1.5' is not a whole number");
+  expect_error(write("c_truncated.off", "COFF\n4 1 0\n" + v3 + "3 0 1 2\n"),
+               "face 0: the file ends before the 1 faces the header announces");
+  expect_error(write("c_together.off", "COFF\n3 1 0 0 0 0 1 1 1\n1 0 0 1 1 1\n0 1 0 1 1 1\n3 0 1 2\n"),
+               "line 2: the first vertex must start on the line after the counts");
 }
 
 // ------------------------------------------------------------------------------------ STL

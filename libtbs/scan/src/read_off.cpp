@@ -1,5 +1,6 @@
 // The OFF reader: our own pass over the header, so that no count reaches CGAL before it is
 // checked, then CGAL's OFF reader into containers that refuse counts the file cannot hold.
+// COFF (vertex colours), which CGAL 5.5 misreads, is read by our own line reader.
 
 #include "scan_readers.h"
 
@@ -63,10 +64,19 @@ std::string signed_count(std::size_t n) {
                                                  : std::to_string(n);
 }
 
+// The longest line of a COFF file we read (a face of many corners still fits).
+constexpr std::size_t kMaxOffLine = 1 << 20;
+
+struct OffHeader {
+  std::size_t vertices = 0, faces = 0;
+  bool colours = false;  // COFF: a colour after each vertex (and maybe after each face)
+  bool normals = false;  // NOFF: nx ny nz after each vertex
+};
+
 // The header of an OFF file, read by us before CGAL sees it: CGAL 5.5's header scanner reads
 // the counts into ints and estimates a halfedge count from them in int arithmetic, which
-// overflows (undefined behaviour) for counts near 2^31. Returns the vertex and face counts.
-std::pair<std::size_t, std::size_t> read_off_header(const Ctx& c) {
+// overflows (undefined behaviour) for counts near 2^31.
+OffHeader read_off_header(const Ctx& c) {
   constexpr const char* kBadHeader =
       "not a valid OFF header (expected OFF, NOFF, 4OFF or 4NOFF, then the vertex, face and edge "
       "counts, each below 2^31)";
@@ -103,8 +113,8 @@ std::pair<std::size_t, std::size_t> read_off_header(const Ctx& c) {
     return true;
   };
   const bool textures = take("ST"), colours = take("C");
-  take("N");
-  take("4");
+  const bool normals = take("N");
+  const bool homogeneous = take("4");
   const bool dimension = take("n");
   if (rest != "OFF") c.fail("line 1", kBadHeader);
   std::string next = token();
@@ -113,10 +123,11 @@ std::pair<std::size_t, std::size_t> read_off_header(const Ctx& c) {
     other_dimension = next != "3";
     next = token();
   }
-  if (next == "BINARY" || textures || colours || other_dimension)
+  if (next == "BINARY" || textures || other_dimension || (colours && (homogeneous || dimension)))
     c.fail("line 1",
-           "binary OFF and OFF with colours (C), texture coordinates (ST) or a dimension other "
-           "than 3 are not supported; convert the scan to PLY or to plain ASCII OFF");
+           "binary OFF and OFF with texture coordinates (ST), a dimension other than 3 or "
+           "homogeneous coordinates with colours (C4OFF) are not supported; convert the scan to "
+           "PLY or to plain ASCII OFF");
   long long counts[3] = {0, 0, 0};
   for (int k = 0; k < 3; ++k) {
     const std::string t = k == 0 ? next : token();
@@ -142,13 +153,100 @@ std::pair<std::size_t, std::size_t> read_off_header(const Ctx& c) {
     c.fail("line 1", "the header announces " + std::to_string(nv) + " vertices and " +
                          std::to_string(nf) + " faces; OFF files are read only up to 10^9 vertices "
                          "and faces together; convert the scan to PLY");
-  return {nv, nf};
+  return {nv, nf, colours, normals};
+}
+
+// COFF and CNOFF, read line by line: CGAL 5.5's polygon-soup reader can index past the values
+// of a line when vertices carry colours. A vertex line is x y z, then nx ny nz (CNOFF), then
+// its colour (1, 3 or 4 numbers), which is skipped; a face line is the corner count, the
+// corners, then an optional colour. '#' starts a comment to the end of the line.
+Scan read_off_lines(const Ctx& c, const OffHeader& h) {
+  std::ifstream is = open_binary(c);
+  std::string buf(kMaxOffLine, '\0');
+  std::size_t line = 0;
+  std::vector<std::string_view> words;
+  // The words of the next line that has any; false at the end of the file.
+  auto next = [&]() {
+    while (true) {
+      is.getline(buf.data(), static_cast<std::streamsize>(buf.size()));
+      const auto got = is.gcount();
+      if (is.fail() && !is.eof() && got == static_cast<std::streamsize>(buf.size()) - 1)
+        c.fail(Where{"line", line + 1}, "longer than " + std::to_string(kMaxOffLine) +
+                                            " characters; the file is corrupt");
+      if (got == 0 && is.eof()) return false;
+      if (is.bad()) throw IoError(c.path + ": read error; check the disk or the network share");
+      ++line;
+      std::string_view l(buf.data(), std::strlen(buf.data()));
+      if (const auto hash = l.find('#'); hash != std::string_view::npos) l = l.substr(0, hash);
+      words = split_ws(l);
+      const bool eof = is.eof();
+      is.clear();
+      if (!words.empty()) return true;
+      if (eof) return false;
+    }
+  };
+  // The header's keyword and three counts, already checked; the data starts on the next line.
+  for (std::size_t taken = 0; taken < 4;) {
+    if (!next()) c.fail("line 1", "the file ends inside the header");
+    taken += words.size();
+    if (taken > 4)
+      c.fail(Where{"line", line}, "the first vertex must start on the line after the counts");
+  }
+  Scan scan;
+  scan.positions.reserve(h.vertices);
+  const std::size_t need = h.normals ? 6 : 3;
+  double v[6];
+  for (std::size_t i = 0; i < h.vertices; ++i) {
+    if (!next())
+      c.fail(Where{"vertex", i}, "the file ends before the " + std::to_string(h.vertices) +
+                                     " vertices the header announces; it is truncated");
+    const Where where{"line", line};
+    if (words.size() < need)
+      c.fail(where, "vertex " + std::to_string(i) + " has " + std::to_string(words.size()) +
+                        " values; a COFF vertex is x y z" + (h.normals ? " nx ny nz" : "") +
+                        " and then its colour");
+    for (std::size_t k = 0; k < need; ++k)
+      if (const std::string bad = parse_double(words[k], v[k]); !bad.empty())
+        c.fail(where, "value " + std::to_string(k + 1) + " " + bad + "; fix the exporter or the file");
+    scan.positions.push_back(c.point(where, v[0], v[1], v[2]));
+    if (h.normals) scan.normals.push_back(c.normal(where, v[3], v[4], v[5]));
+  }
+  std::vector<long long> corners;
+  for (std::size_t f = 0; f < h.faces; ++f) {
+    if (!next())
+      c.fail(Where{"face", f}, "the file ends before the " + std::to_string(h.faces) +
+                                   " faces the header announces; it is truncated");
+    const Where where{"line", line};
+    long long count = -1;
+    const auto [end, ec] = std::from_chars(words[0].data(), words[0].data() + words[0].size(), count);
+    if (ec != std::errc() || end != words[0].data() + words[0].size() || count < 0 ||
+        count > static_cast<long long>(kMaxPolygonCorners))
+      c.fail(where, "face " + std::to_string(f) + ": the corner count '" + printable(words[0]) +
+                        "' is not a whole number from 3 to " + std::to_string(kMaxPolygonCorners) +
+                        "; the file is corrupt");
+    if (words.size() < static_cast<std::size_t>(count) + 1)
+      c.fail(where, "face " + std::to_string(f) + " announces " + std::to_string(count) +
+                        " corners but gives " + std::to_string(words.size() - 1) + "; the file is corrupt");
+    corners.assign(static_cast<std::size_t>(count), 0);
+    for (long long k = 0; k < count; ++k) {
+      const std::string_view w = words[static_cast<std::size_t>(k) + 1];
+      const auto [e, err] = std::from_chars(w.data(), w.data() + w.size(), corners[static_cast<std::size_t>(k)]);
+      if (err != std::errc() || e != w.data() + w.size())
+        c.fail(where, "face " + std::to_string(f) + ": corner " + std::to_string(k) + " '" +
+                          printable(w) + "' is not a whole number; the file is corrupt");
+    }
+    c.add_polygon({"face", f}, corners, h.vertices, scan.triangles);
+  }
+  c.finish(scan);
+  return scan;
 }
 
 }  // namespace
 
 Scan read_off(const Ctx& c) {
-  const auto [nv, nf] = read_off_header(c);
+  const OffHeader h = read_off_header(c);
+  if (h.colours) return read_off_lines(c, h);
+  const std::size_t nv = h.vertices, nf = h.faces;
   {
     // CGAL's own view of the (now bounded) header: the variants its reader gets wrong.
     std::ifstream is = open_binary(c);
@@ -163,8 +261,8 @@ Scan read_off(const Ctx& c) {
     if (header.binary() || header.has_colors() || header.has_textures() ||
         (header.n_dimensional() && header.dimension() != 3))
       c.fail("line 1",
-             "binary OFF and OFF with colours (C), texture coordinates (ST) or a dimension other "
-             "than 3 are not supported; convert the scan to PLY or to plain ASCII OFF");
+             "binary OFF and OFF with texture coordinates (ST) or a dimension other than 3 are "
+             "not supported; convert the scan to PLY or to plain ASCII OFF");
     if (header.size_of_vertices() != nv || header.size_of_facets() != nf)
       c.fail("line 1", "CGAL reads this header differently (" + std::to_string(header.size_of_vertices()) +
                            " vertices, " + std::to_string(header.size_of_facets()) +
