@@ -551,7 +551,7 @@ std::vector<P2> flatten(const Mesh3& m, const ParameterizeOptions& o, Parameteri
   const Folds f = find_folds(m, uv, loops);
   if (!f.ok())
     throw InvalidInput("no bijective parameterization found: the mean-value map folds too (" + f.describe() +
-                       "), which happens only for degenerate meshes; repair the mesh (e.g. remove slivers) and retry");
+                       "); repair the mesh (e.g. remove slivers, fill holes) or cut it into simpler pieces and retry");
   rep.method = "mean value (circular boundary)";
   return uv;
 }

@@ -173,7 +173,12 @@ ParameterizedScan parameterize_scan(const Scan& scan, const ParameterizeOptions&
     }
   }
 
-  std::vector<P2> uv = flatten(part, o, rep);
+  std::vector<P2> uv;
+  try {
+    uv = flatten(part, o, rep);
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(name + ": " + found + ": " + e.what());
+  }
   normalise(part, uv);
   rep.distortion = distortion(part, uv);
 
