@@ -153,6 +153,14 @@ ParameterizedScan parameterize_scan(const Scan& scan, const ParameterizeOptions&
                          " almost no area (" + short_number(area) + " in a box of diagonal " +
                          short_number(diagonal) + "): they are slivers; remesh the scan");
   }
+  // A step's refusal, prefixed with the file and the component as the checks above are.
+  auto naming_the_component = [&](auto&& step) {
+    try {
+      return step();
+    } catch (const InvalidInput& e) {
+      throw InvalidInput(name + ": " + found + ": " + e.what());
+    }
+  };
   if (rep.used.genus > 0)
     throw InvalidInput(name + ": " + found + ": tbs fits one surface that unfolds onto the plane (a disk, "
                        "possibly with holes, or a closed surface of genus 0); " +
@@ -166,19 +174,10 @@ ParameterizedScan parameterize_scan(const Scan& scan, const ParameterizeOptions&
     if (!o.cut_closed)
       throw InvalidInput(name + ": " + found + ": the surface is closed; cut it open into a disk, or allow a seam");
     say("cutting the closed surface open along a seam");
-    try {
-      rep.seam_edges = cut_along_seam(part);
-    } catch (const InvalidInput& e) {
-      throw InvalidInput(name + ": " + found + ": " + e.what());
-    }
+    rep.seam_edges = naming_the_component([&] { return cut_along_seam(part); });
   }
 
-  std::vector<P2> uv;
-  try {
-    uv = flatten(part, o, rep);
-  } catch (const InvalidInput& e) {
-    throw InvalidInput(name + ": " + found + ": " + e.what());
-  }
+  std::vector<P2> uv = naming_the_component([&] { return flatten(part, o, rep); });
   normalise(part, uv);
   rep.distortion = distortion(part, uv);
 
