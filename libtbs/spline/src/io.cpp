@@ -199,6 +199,44 @@ SplineFile parse_tbs(std::string_view text, const std::string& name, const ReadO
     }
   }
 
+  if (auto it = j.find("atlas"); it != j.end()) {
+    if (version < 2) r.fail("atlas", "an atlas needs version 2 of the format, the file says " + std::to_string(version));
+    if (!it->is_object()) r.fail("atlas", std::string("expected an object, got ") + it->type_name());
+    if (auto c = it->find("closed"); c != it->end()) {
+      if (!c->is_boolean()) r.fail("atlas.closed", "expected true or false");
+      out.atlas.closed = c->get<bool>();
+    }
+    if (auto g = it->find("genus"); g != it->end()) out.atlas.genus = r.integer(*g, "atlas.genus");
+    const json& js = r.array(r.field(*it, "seams", "atlas"), "atlas.seams");
+    for (size_t s = 0; s < js.size(); ++s) {
+      const std::string p = idx("atlas.seams", s);
+      if (!js[s].is_object()) r.fail(p, std::string("expected an object, got ") + js[s].type_name());
+      Seam seam;
+      if (auto sh = js[s].find("sharp"); sh != js[s].end()) {
+        if (!sh->is_boolean()) r.fail(p + ".sharp", "expected true or false");
+        seam.sharp = sh->get<bool>();
+      }
+      const json& ja = r.array(r.field(js[s], "a", p), p + ".a");
+      const json& jb = r.array(r.field(js[s], "b", p), p + ".b", ja.size());
+      for (size_t i = 0; i < ja.size(); ++i) {
+        seam.a.push_back(r.point2(ja[i], idx(p + ".a", i)));
+        seam.b.push_back(r.point2(jb[i], idx(p + ".b", i)));
+      }
+      out.atlas.seams.push_back(std::move(seam));
+    }
+    if (auto b = it->find("borders"); b != it->end()) {
+      r.array(*b, "atlas.borders");
+      for (size_t i = 0; i < b->size(); ++i) {
+        const std::string p = idx("atlas.borders", i);
+        const json& line = r.array((*b)[i], p);
+        std::vector<Point2> border;
+        for (size_t k = 0; k < line.size(); ++k) border.push_back(r.point2(line[k], idx(p, k)));
+        out.atlas.borders.push_back(std::move(border));
+      }
+    }
+    check_atlas_structure(out.atlas, name);
+  }
+
   const json& dom = r.field(j, "domain", "");
   if (!dom.is_object()) r.fail("domain", "expected an object");
   const json& jv = r.array(r.field(dom, "vertices", "domain"), "domain.vertices");
@@ -311,9 +349,11 @@ std::string format_tbs(const SplineFile& f) {
   }
   if (!meta.is_object()) throw InvalidInput("metadata must be a JSON object");
 
+  check_atlas_structure(f.atlas, "atlas");
+
   json j = json::object();
   j["format"] = "tbs";
-  j["version"] = kTbsFormatVersion;
+  j["version"] = f.atlas.empty() ? 1 : kTbsFormatVersion;
   j["degree"] = n;
   j["units"] = f.units;
   json dom = json::object();
@@ -346,6 +386,25 @@ std::string format_tbs(const SplineFile& f) {
     map.push_back(std::move(row));
   }
   j["control_point_map"] = std::move(map);
+  if (!f.atlas.empty()) {
+    json seams = json::array();
+    for (const Seam& seam : f.atlas.seams) {
+      json a = json::array(), b = json::array();
+      for (const auto& p : seam.a) a.push_back({p.x(), p.y()});
+      for (const auto& p : seam.b) b.push_back({p.x(), p.y()});
+      seams.push_back({{"sharp", seam.sharp}, {"a", std::move(a)}, {"b", std::move(b)}});
+    }
+    json borders = json::array();
+    for (const auto& line : f.atlas.borders) {
+      json b = json::array();
+      for (const auto& p : line) b.push_back({p.x(), p.y()});
+      borders.push_back(std::move(b));
+    }
+    j["atlas"] = {{"closed", f.atlas.closed},
+                  {"genus", f.atlas.genus},
+                  {"seams", std::move(seams)},
+                  {"borders", std::move(borders)}};
+  }
   j["metadata"] = std::move(meta);
   if (f.points.size() != f.point_parameters.size())
     throw InvalidInput(std::to_string(f.points.size()) + " points but " + std::to_string(f.point_parameters.size()) +

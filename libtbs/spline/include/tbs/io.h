@@ -2,6 +2,7 @@
 /// \file
 /// The native file format `.tbs` (JSON, documented in docs/format.md) and atomic file output.
 
+#include <tbs/atlas.h>
 #include <tbs/spline.h>
 
 #include <string>
@@ -10,8 +11,11 @@
 
 namespace tbs {
 
-/// Current version of the .tbs format written by this library.
-inline constexpr int kTbsFormatVersion = 1;
+/// The newest version of the .tbs format this library reads and writes: 2 adds the atlas.
+/// Files without an atlas are written as version 1, as before atlases, so that older readers
+/// read them; a file with seams is version 2, which older readers refuse instead of reading
+/// a closed surface as separate sheets.
+inline constexpr int kTbsFormatVersion = 2;
 
 /// A spline as stored in a .tbs file.
 struct SplineFile {
@@ -24,6 +28,9 @@ struct SplineFile {
   /// error maps can be made from the .tbs alone. Empty, or as many as point_parameters.
   std::vector<Point3> points = {};
   std::vector<Point2> point_parameters = {};  ///< The parameter (u, v) of each point.
+  /// The seams that glue the domain's components (charts) into one surface; empty for a
+  /// spline over one planar domain.
+  Atlas atlas = {};
 };
 
 struct ReadOptions {
@@ -40,8 +47,9 @@ SplineFile parse_tbs(std::string_view text, const std::string& name = "<memory>"
 SplineFile read_tbs(const std::string& path, const ReadOptions& options = {});
 
 /// The .tbs text of a spline. Numbers round-trip exactly.
-/// \throw InvalidInput if the units are unknown, metadata_json is not a JSON object, or points
-///   and point_parameters differ in size or hold a non-finite value (the message names no file).
+/// \throw InvalidInput if the units are unknown, metadata_json is not a JSON object, points
+///   and point_parameters differ in size or hold a non-finite value, or the atlas is not well
+///   formed (check_atlas_structure()) (the message names no file).
 std::string format_tbs(const SplineFile& file);
 
 /// Writes a .tbs file atomically (see AtomicOutput).

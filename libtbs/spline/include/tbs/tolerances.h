@@ -20,4 +20,11 @@ inline constexpr double kSubKnotMax = 0.8;
 /// about 1e-16 relative area where the exact intersection is a point or a segment.
 inline constexpr double kCommonInteriorRelArea = 1e-12;
 
+/// A fold is a reversal of the normal (a turn above 150 degrees) between points of the surface
+/// that lie within the fit tolerance of each other (the steerers' definition, issue 48); where
+/// no tolerance is known, this fraction of the model size, the default relative tolerance of a
+/// fit. A sharp turn that the data demands turns at about the tolerance's radius and does not
+/// reverse within it.
+inline constexpr double kDefaultFoldTolerance = 1e-3;
+
 }  // namespace tbs::tol
