@@ -59,6 +59,9 @@ std::string ParameterizeReport::to_json() const {
   j["component"] = component;
   j["component_topology"] = topo(used);
   j["seam_edges"] = seam_edges;
+  j["charts"] = charts;
+  j["seams"] = seams;
+  j["stretch"] = stretch;
   j["method"] = method;
   j["fallback_reason"] = fallback_reason;
   if (method == "LSCM, areas relaxed")
@@ -161,24 +164,47 @@ ParameterizedScan parameterize_scan(const Scan& scan, const ParameterizeOptions&
       throw InvalidInput(name + ": " + found + ": " + e.what());
     }
   };
-  if (rep.used.genus > 0)
-    throw InvalidInput(name + ": " + found + ": tbs fits one surface that unfolds onto the plane (a disk, "
-                       "possibly with holes, or a closed surface of genus 0); " +
-                       (rep.input == "point cloud"
-                            ? std::string("the surface reconstructed from the points has handles, which happens "
-                                          "when the points are too sparse for the surface's curvature; give a "
-                                          "denser scan or a mesh")
-                            : std::string("cut this one open into a disk (e.g. in Blender or MeshLab) or split it "
-                                          "into pieces and fit each")));
-  if (rep.used.boundary_loops == 0) {
-    if (!o.cut_closed)
-      throw InvalidInput(name + ": " + found + ": the surface is closed; cut it open into a disk, or allow a seam");
-    say("cutting the closed surface open along a seam");
-    rep.seam_edges = naming_the_component([&] { return cut_along_seam(part); });
+  const bool closed = rep.used.boundary_loops == 0;
+  if ((closed || rep.used.genus > 0) && !o.cut_closed)
+    throw InvalidInput(name + ": " + found + ": the surface is " + (closed ? "closed" : "not a disk (it has handles)") +
+                       "; allow tbs to cut it into charts, or cut it open into a disk yourself");
+  std::vector<P2> uv;
+  // One flattening where the surface is a disk, possibly with holes, and it keeps within the
+  // chart stretch (an explicit method is used as asked); charts otherwise.
+  bool charts = closed || rep.used.genus > 0;
+  if (!charts) {
+    try {
+      uv = naming_the_component([&] { return flatten(part, o, rep); });
+      normalise(part, uv);
+      rep.stretch = flattening_stretch(part, uv);
+      if (o.method == FlattenMethod::Auto && rep.stretch > o.chart_stretch) {
+        char text[160];
+        std::snprintf(text, sizeof text, "one flattening stretches %.3g times (more than %.3g); cutting the surface "
+                      "into charts", rep.stretch, o.chart_stretch);
+        say(text);
+        charts = true;
+      }
+    } catch (const InvalidInput&) {
+      if (o.method != FlattenMethod::Auto) throw;
+      say("no single flattening is bijective (" + rep.fallback_reason + "); cutting the surface into charts");
+      charts = true;
+    }
   }
-
-  std::vector<P2> uv = naming_the_component([&] { return flatten(part, o, rep); });
-  normalise(part, uv);
+  if (charts) {
+    ChartCut cut = naming_the_component([&] { return cut_into_charts(part, o, rep); });
+    part = std::move(cut.mesh);
+    uv = std::move(cut.uv);
+    rep.charts = cut.charts;
+    rep.seams = cut.seams.size();
+    rep.seam_edges = cut.seam_edges;
+    rep.stretch = cut.stretch;
+    rep.method = "charts (LSCM)";
+    rep.fallback_reason.clear();
+    out.scan.atlas.seams = std::move(cut.seams);
+    out.scan.atlas.borders = std::move(cut.borders);
+    out.scan.atlas.closed = closed;
+    out.scan.atlas.genus = rep.used.genus;
+  }
   rep.distortion = distortion(part, uv);
 
   // The input point of each part vertex: exact positions, first index.
@@ -188,8 +214,13 @@ ParameterizedScan parameterize_scan(const Scan& scan, const ParameterizeOptions&
   Scan& s = out.scan;
   s.source = scan.source;
   if (!cloud) {
-    const size_t copies = rep.seam_edges > 0 ? rep.seam_edges - 1 : 0;
-    rep.points_dropped = scan.positions.size() - (part.points.size() - copies);
+    // Vertices on seams appear once per chart: count the input points used.
+    std::vector<char> used_point(scan.positions.size(), 0);
+    for (const Point3& p : part.points) {
+      const auto it = index_of.find(key(p));
+      if (it != index_of.end()) used_point[it->second] = 1;
+    }
+    rep.points_dropped = scan.positions.size() - static_cast<size_t>(std::count(used_point.begin(), used_point.end(), 1));
     // Each vertex's input point; subdivision vertices take their edge's first vertex's (for the
     // normal) and are marked as new in `source` below.
     std::vector<int> origin(part.points.size());

@@ -74,11 +74,29 @@ Mesh3 repair(const std::vector<Point3>& positions, const std::vector<Tri>& trian
 std::vector<int> face_components(const std::vector<Tri>& faces, int& count);
 
 
-// Cuts a closed genus-0 mesh open along a shortest path between two far apart vertices: the
-// path's inner vertices are duplicated, the faces on its left taking the copies. Returns the
-// number of seam edges.
-size_t cut_along_seam(Mesh3& m);
+// The atlas of a surface (charts.cpp): the mesh with a vertex per chart it is in (faces in
+// their order), the parameters of the charts laid side by side, and the seams between them.
+struct ChartCut {
+  Mesh3 mesh;
+  std::vector<P2> uv;
+  std::vector<int> origin;  // the input vertex of each vertex
+  std::vector<Seam> seams;
+  std::vector<std::vector<Point2>> borders;  // the mesh's boundary, as Atlas::borders
+  int charts = 0;
+  size_t seam_edges = 0;
+  double stretch = 0;  // the largest flattening_stretch of a chart
+};
 
+// Cuts a surface (a repaired, oriented, connected manifold mesh) into charts: along sharp
+// edges, across handles, between the boundary loops of tubes, and in two where a chart is
+// closed or stretches beyond options.chart_stretch; flattens each and lays them out.
+// \throw InvalidInput if a chart can be neither cut nor flattened.
+ChartCut cut_into_charts(const Mesh3& m, const ParameterizeOptions& o, ParameterizeReport& rep);
+
+// How far a flattening would stretch a spline fitted over it (charts.cpp): 1 over the smaller
+// singular value of the triangles' maps, times the (u, v) box's diagonal over the 3D box's,
+// the map scaled to the surface's area; the largest but for 0.5 % of the area.
+double flattening_stretch(const Mesh3& m, const std::vector<P2>& uv);
 
 // Scales the parameters to the surface's area, turns them to their principal axes (a rotation,
 // so orientation is kept) and moves their box to the origin.

@@ -1,8 +1,9 @@
 #pragma once
 /// \file
 /// Parameters (u, v) for scans that have none. A mesh is repaired, one connected component is
-/// chosen, a closed surface is cut open along a seam, and the result is flattened bijectively
-/// (free-boundary conformal, LSCM, with a fallback that cannot fold). A bare point cloud is
+/// chosen and flattened bijectively (free-boundary conformal, LSCM, with a fallback that cannot
+/// fold); a closed surface, one with handles, or one whose single flattening would stretch too
+/// much is cut into charts first (an atlas: Scan::atlas), each flattened on its own. A bare point cloud is
 /// first meshed by advancing-front reconstruction, and every point gets the parameter of its
 /// closest point on that mesh.
 
@@ -44,9 +45,17 @@ struct ParameterizeOptions {
   /// The connected component to flatten, numbered from 1 by decreasing face count; 0 is the
   /// largest (the same as 1).
   int component = 0;
-  /// A closed surface of genus 0 is cut open along a seam (a shortest path between two far
-  /// apart vertices), which becomes a boundary of the parameter domain; false refuses it.
+  /// A closed surface, or one with handles, is cut into charts (an atlas, see chart_stretch);
+  /// false refuses it.
   bool cut_closed = true;
+  /// The most a chart's flattening may stretch a spline over it: the largest |F_u|, |F_v|
+  /// (1 over the smaller singular value of the map from the surface to the plane, scaled to
+  /// the surface's area) times the diameter of the chart's (u, v) box over that of its 3D box,
+  /// as FitReport::max_stretch measures the fit (leaving out the worst 0.5 % of the area). A
+  /// surface that is not a disk, or whose one flattening (FlattenMethod::Auto) stretches more
+  /// or folds, is cut into charts: along sharp edges (sharp_angle), across handles, between
+  /// the boundary loops of a tube, and in two until each chart keeps within this.
+  double chart_stretch = 4;
   /// Meshes with fewer vertices are refined by 1-to-4 subdivision until they have at least this
   /// many (at most 4 times), so that the fit has more than the vertices to go by: the new
   /// points lie on a smooth surface through the old ones (PN triangles from crease-aware
@@ -80,7 +89,11 @@ struct ParameterizeReport {
   MeshTopology topology;               ///< of the repaired mesh, all components
   int component = 1;                   ///< the component flattened (1 = largest)
   MeshTopology used;                   ///< of that component (before any seam cut)
-  size_t seam_edges = 0;               ///< a closed surface was cut open along this many edges
+  size_t seam_edges = 0;               ///< the surface was cut into charts along this many edges
+  int charts = 1;                      ///< charts of the atlas (1: one flattening, no seam)
+  size_t seams = 0;                    ///< seams of the atlas (chains of cut edges)
+  /// The largest stretch of a chart's flattening (ParameterizeOptions::chart_stretch).
+  double stretch = 0;
   std::string method;                  ///< "LSCM", "LSCM, areas relaxed" or "mean value (circular boundary)"
   std::string fallback_reason;         ///< why LSCM was not kept; empty if it was
   Distortion distortion;
@@ -107,8 +120,8 @@ struct ParameterizedScan {
 /// Computes parameters for a scan without them: a mesh (scan.triangles non-empty) or a point
 /// cloud. Normals of the input are carried to the output, normalised.
 /// \throw InvalidInput naming the scan and what was found (components, boundary loops,
-///   genus) if the chosen component is not a disk, possibly with holes, or a closed genus-0
-///   surface (with cut_closed); if the component does not exist; if the scan has fewer than 3
+///   genus) if the chosen component is closed or has handles and cut_closed is false, or a
+///   chart can be neither cut nor flattened; if the component does not exist; if the scan has fewer than 3
 ///   points, a point cloud's points are identical or collinear, or the reconstruction or the
 ///   repair leaves no triangle; if LSCM folds with FlattenMethod::Lscm; or if no method gives a
 ///   bijective map (some of these flattening messages do not name the scan); if a position

@@ -3,6 +3,7 @@
 /// Scans (the input of fitting): reading them from PLY, OBJ, OFF, STL and XYZ files, and
 /// estimating their normals.
 
+#include <tbs/atlas.h>
 #include <tbs/types.h>
 
 #include <array>
@@ -26,6 +27,10 @@ struct Scan {
   /// surface between the measured points with a tenth of their weight; the error and the
   /// tolerance are measured at the other points only.
   std::vector<std::uint8_t> guide;
+  /// Empty, or the seams that glue the parameters' charts (components of the uv plane) into one
+  /// surface: parameterize_scan() cuts closed surfaces, handles and surfaces that one
+  /// flattening would stretch into charts; the fit ties the spline across the seams.
+  Atlas atlas;
   std::string source;                         ///< the path it was read from
   /// Faces the reader left out: polygons with fewer than three corners, and triangles (of a
   /// polygon's fan) with a repeated corner. (In OBJ, tinyobjloader drops faces with fewer than
