@@ -1,6 +1,7 @@
 // tbs::fit (fit.h): the paper's Algorithm 1, the refinement loop around the domain, the
 // solve and the knot moves, with the options' checks, the memory model, progress and the report.
 
+#include <tbs/atlas.h>
 #include <tbs/errors.h>
 #include <tbs/evaluator.h>
 #include <tbs/fit.h>
@@ -97,6 +98,271 @@ struct Errors {
   double max = 0, rms = 0;
 };
 
+// The longest edge of the domain triangle at p (infinity outside the domain).
+double edge_at(const Spline& spline, const Evaluator& eval, const Point2& p) {
+  const Domain& d = spline.domain();
+  const int t = eval.locate(p);
+  if (t < 0) return std::numeric_limits<double>::infinity();
+  double l = 0;
+  for (int k = 0; k < 3; ++k) l = std::max(l, (d.vertex(d.triangle(t)[k]) - d.vertex(d.triangle(t)[(k + 1) % 3])).norm());
+  return l;
+}
+
+// The window of the seams' smoothing, in seam edges of the mesh either side (align_seams).
+constexpr double kSeamSmoothing = 0;
+
+// Seams are sampled at this fraction of the longest edge of the domain triangles they cross
+// (the smaller of the two sides'): the spline is piecewise polynomial on cells of its knot
+// lines, several across a triangle, and the ties must hold between the samples too.
+constexpr double kSeamSpacing = 1.0 / 24;
+
+// The seams aligned with the fitted surfaces of their two sides: each seam is resampled at
+// kSeamSpacing, and each pair of glued inner points (a, b) moved, each in its own chart, to
+// where its surface reaches the midpoint of F(a) and F(b) (Gauss-Newton steps in the
+// parameters; the seam's end points, which other seams and borders share, stay). Two charts
+// fitted apart meet within the tolerance, but not at the same parameters of their seam
+// sides: tied there, one side would have to slide over the other within a band narrower than
+// its points, and folds. Tied where they already meet, they join with little strain. J of each
+// point: the derivative of the map from b's chart to a's that the two surfaces give, for the
+// tangent ties.
+struct AlignedSeams {
+  Atlas atlas;
+  std::vector<std::vector<Eigen::Matrix2d>> J;  // per seam, per point
+};
+
+// Gauss-Newton steps in u, inside the domain, toward where F reaches `target` (the point of
+// the surface nearest to it). fp is F at u, and at the result on return.
+void move_toward(const Evaluator& eval, const Point3& target, Point2& u, SurfacePoint& fp) {
+  for (int it = 0; it < 4; ++it) {
+    Eigen::Matrix<double, 3, 2> D;
+    D << fp.du, fp.dv;
+    const Eigen::Matrix2d N = D.transpose() * D;
+    if (!(std::abs(N.determinant()) > 0)) return;
+    const Vector2 step = N.ldlt().solve(D.transpose() * (target - fp.position));
+    if (!step.allFinite()) return;
+    const Point2 next = u + step;
+    if (eval.locate(next) < 0) return;
+    u = next;
+    fp = eval.evaluate(u);
+    if (step.norm() < 1e-12 * (1 + u.norm())) return;
+  }
+}
+
+// The point `target`, or the point at distance `reach` from `from` toward it if it is farther:
+// alignment corrects what fits within the tolerance disagree on; where two sides are farther
+// apart, the fit is still coarse there, and the ties, not the seams, have to bring them
+// together.
+Point3 toward(const Point3& from, const Point3& target, double reach) {
+  const Vector3 d = target - from;
+  const double l = d.norm();
+  return l > reach && l > 0 ? Point3(from + d * (reach / l)) : target;
+}
+
+// J with D_b = D_a J, least squares (the map from b's chart to a's, to first order).
+Eigen::Matrix2d transition(const SurfacePoint& fa, const SurfacePoint& fb) {
+  Eigen::Matrix<double, 3, 2> Da, Db;
+  Da << fa.du, fa.dv;
+  Db << fb.du, fb.dv;
+  const Eigen::Matrix2d N = Da.transpose() * Da;
+  Eigen::Matrix2d J = std::abs(N.determinant()) > 0 ? Eigen::Matrix2d(N.ldlt().solve(Da.transpose() * Db))
+                                                    : Eigen::Matrix2d::Identity();
+  if (!J.allFinite()) J.setIdentity();
+  return J;
+}
+
+AlignedSeams align_seams(const Atlas& atlas, const Spline& spline, const Evaluator& eval, double reach) {
+  AlignedSeams out;
+  out.atlas = atlas;
+  out.atlas.seams.clear();
+  // The seams' end points first: where seams end, one point of the surface has a copy in each
+  // chart around it (a junction), shared by every seam and border that ends there. The copies
+  // glued by the seams (by their exact parameters) form one group; each copy moves toward the
+  // mean of the group's surface points, and every end at it moves with it.
+  auto key = [](const Point2& p) { return std::make_pair(p.x(), p.y()); };
+  std::map<std::pair<double, double>, int> copy_of;
+  std::vector<Point2> copies;
+  auto copy_index = [&](const Point2& p) {
+    auto [it, added] = copy_of.emplace(key(p), static_cast<int>(copies.size()));
+    if (added) copies.push_back(p);
+    return it->second;
+  };
+  std::vector<std::array<int, 2>> glued;
+  for (const Seam& seam : atlas.seams) {
+    glued.push_back({copy_index(seam.a.front()), copy_index(seam.b.front())});
+    glued.push_back({copy_index(seam.a.back()), copy_index(seam.b.back())});
+  }
+  std::vector<int> group(copies.size());
+  std::iota(group.begin(), group.end(), 0);
+  auto find = [&](int x) {
+    while (group[static_cast<size_t>(x)] != x) x = group[static_cast<size_t>(x)] = group[static_cast<size_t>(group[static_cast<size_t>(x)])];
+    return x;
+  };
+  for (const auto& g : glued) group[static_cast<size_t>(find(g[0]))] = find(g[1]);
+  std::vector<SurfacePoint> at(copies.size());
+  std::vector<char> inside(copies.size(), 0);
+  std::map<int, std::pair<Point3, int>> mean;
+  for (size_t c = 0; c < copies.size(); ++c) {
+    if (eval.locate(copies[c]) < 0) continue;
+    inside[c] = 1;
+    at[c] = eval.evaluate(copies[c]);
+    auto& m = mean[find(static_cast<int>(c))];
+    if (m.second == 0) m.first = Point3::Zero();
+    m.first += at[c].position;
+    ++m.second;
+  }
+  std::vector<Point2> moved = copies;
+  for (size_t c = 0; c < copies.size(); ++c) {
+    if (!inside[c]) continue;
+    const auto& m = mean[find(static_cast<int>(c))];
+    move_toward(eval, toward(at[c].position, m.first / m.second, reach), moved[c], at[c]);
+  }
+  auto end_point = [&](const Point2& p) { return moved[static_cast<size_t>(copy_of.at(key(p)))]; };
+  for (auto& border : out.atlas.borders) {
+    if (auto it = copy_of.find(key(border.front())); it != copy_of.end()) border.front() = moved[static_cast<size_t>(it->second)];
+    if (auto it = copy_of.find(key(border.back())); it != copy_of.end()) border.back() = moved[static_cast<size_t>(it->second)];
+  }
+
+  for (const Seam& seam : atlas.seams) {
+    // Resampled: (a, b) pairs, each with its surface points.
+    struct Pair {
+      Point2 a, b;
+      bool fixed = false;  // an end point (moved above with its junction), or outside
+      SurfacePoint fa, fb;
+    };
+    std::vector<Pair> pairs;
+    const size_t P = seam.a.size();
+    double segments = 0;
+    for (size_t i = 0; i + 1 < P; ++i) segments += (seam.a[i + 1] - seam.a[i]).norm();
+    for (size_t i = 0; i + 1 < P; ++i) {
+      const Vector2 da = seam.a[i + 1] - seam.a[i], db = seam.b[i + 1] - seam.b[i];
+      const double len = std::max(da.norm(), db.norm());
+      const double h = std::min({edge_at(spline, eval, seam.a[i]), edge_at(spline, eval, seam.b[i]),
+                                 edge_at(spline, eval, seam.a[i + 1]), edge_at(spline, eval, seam.b[i + 1])});
+      const int m = std::isfinite(h) && len > 0 ? std::clamp(static_cast<int>(std::ceil(len / (kSeamSpacing * h))), 1, 4096) : 1;
+      for (int k = 0; k < m || (k == m && i + 2 == P); ++k) {
+        const double f = static_cast<double>(k) / m;
+        const bool first = i == 0 && k == 0, last = i + 2 == P && k == m;
+        Pair q;
+        q.a = first ? end_point(seam.a.front()) : last ? end_point(seam.a.back()) : Point2(seam.a[i] + f * da);
+        q.b = first ? end_point(seam.b.front()) : last ? end_point(seam.b.back()) : Point2(seam.b[i] + f * db);
+        q.fixed = first || last || eval.locate(q.a) < 0 || eval.locate(q.b) < 0;
+        if (eval.locate(q.a) >= 0 && eval.locate(q.b) >= 0) q.fa = eval.evaluate(q.a), q.fb = eval.evaluate(q.b);
+        pairs.push_back(q);
+      }
+    }
+    // The curve where the two sides meet, smoothed along its length over about two of the
+    // mesh's seam edges: a seam cut along a noisy mesh zigzags from edge to edge, and two
+    // smooth surfaces cannot follow the same zigzag; both sides move onto the smoothed curve
+    // (by at most `reach` plus the zigzag's size).
+    const size_t Q = pairs.size();
+    std::vector<Point3> mid(Q);
+    std::vector<double> arc(Q, 0.0);
+    for (size_t k = 0; k < Q; ++k) {
+      mid[k] = 0.5 * (pairs[k].fa.position + pairs[k].fb.position);
+      if (k > 0) arc[k] = arc[k - 1] + (mid[k] - mid[k - 1]).norm();
+    }
+    const double window = P > 1 ? kSeamSmoothing * segments / static_cast<double>(P - 1) : 0.0;
+    const double wiggle = reach + window;
+    std::vector<Point3> smooth = mid;
+    if (window > 0)
+      for (size_t k = 0, lo = 0, hi = 0; k < Q; ++k) {
+        if (pairs[k].fixed) continue;
+        while (arc[lo] < arc[k] - window) ++lo;
+        while (hi + 1 < Q && arc[hi + 1] <= arc[k] + window) ++hi;
+        Point3 sum = Point3::Zero();
+        double weight = 0;
+        for (size_t j = lo; j <= hi; ++j) {
+          const double w = 1 - std::abs(arc[j] - arc[k]) / (window * 1.0001);
+          sum += w * mid[j];
+          weight += w;
+        }
+        if (weight > 0) smooth[k] = sum / weight;
+      }
+    Seam s;
+    s.sharp = seam.sharp;
+    std::vector<Eigen::Matrix2d> Js;
+    for (size_t k = 0; k < Q; ++k) {
+      Pair& q = pairs[k];
+      if (!q.fixed) {
+        move_toward(eval, toward(q.fa.position, smooth[k], wiggle), q.a, q.fa);
+        move_toward(eval, toward(q.fb.position, smooth[k], wiggle), q.b, q.fb);
+      }
+      s.a.push_back(q.a);
+      s.b.push_back(q.b);
+      Js.push_back(eval.locate(q.a) >= 0 && eval.locate(q.b) >= 0 ? transition(q.fa, q.fb) : Eigen::Matrix2d::Identity());
+    }
+    out.atlas.seams.push_back(std::move(s));
+    out.J.push_back(std::move(Js));
+  }
+  return out;
+}
+
+// The ties of the seams (METHOD.md section 10, fit_solve.h): at every point of the (aligned)
+// seams and between them every kSeamSpacing of the longest edge of the domain triangles met; a
+// gap term everywhere, and on smooth seams a tie of the derivatives across the seam: along the
+// normal of the seam's direction in b's chart (its direction over about half a domain edge, so
+// that the mesh's zigzags do not turn it), and along J times that in a's chart, with the J of
+// the segment's first point (or, before any alignment, the similarity that takes segment b
+// onto segment a: the charts' flattenings are conformal, their transition one to first order).
+std::vector<detail::SeamTie> seam_ties(const Atlas& atlas, const std::vector<std::vector<Eigen::Matrix2d>>& Js,
+                                       const Spline& spline, const Evaluator& eval) {
+  std::vector<detail::SeamTie> ties;
+  for (size_t si = 0; si < atlas.seams.size(); ++si) {
+    const Seam& seam = atlas.seams[si];
+    const size_t P = seam.a.size();
+    // Arc length of side b at each point, for the smoothed direction.
+    std::vector<double> arc(P, 0.0);
+    for (size_t i = 1; i < P; ++i) arc[i] = arc[i - 1] + (seam.b[i] - seam.b[i - 1]).norm();
+    auto direction_b = [&](size_t i, double f, double h) {
+      // The chord of side b over +- h / 4 of arc length around the point.
+      const double here = arc[i] + f * (i + 1 < P ? arc[i + 1] - arc[i] : 0.0);
+      auto point_at = [&](double s) {
+        s = std::clamp(s, 0.0, arc.back());
+        const size_t k = std::min<size_t>(static_cast<size_t>(std::upper_bound(arc.begin(), arc.end(), s) - arc.begin()), P - 1);
+        const size_t j = k == 0 ? 0 : k - 1;
+        const double len = arc[k] - arc[j];
+        const double g = len > 0 ? (s - arc[j]) / len : 0.0;
+        return Point2(seam.b[j] + g * (seam.b[k] - seam.b[j]));
+      };
+      const double r = std::isfinite(h) ? 0.25 * h : 0.0;
+      Vector2 t = point_at(here + r) - point_at(here - r);
+      if (!(t.norm() > 0)) t = seam.b[std::min(i + 1, P - 1)] - seam.b[i];
+      return t.norm() > 0 ? Vector2(t.normalized()) : Vector2(1, 0);
+    };
+    for (size_t i = 0; i + 1 < P; ++i) {
+      const Vector2 da = seam.a[i + 1] - seam.a[i], db = seam.b[i + 1] - seam.b[i];
+      Eigen::Matrix2d J = Eigen::Matrix2d::Identity();
+      if (si < Js.size() && i < Js[si].size()) {
+        J = Js[si][i];
+      } else if (const double nb = db.squaredNorm(); nb > 0) {
+        // da / db as complex numbers.
+        const double re = (da.x() * db.x() + da.y() * db.y()) / nb, im = (da.y() * db.x() - da.x() * db.y()) / nb;
+        J << re, -im, im, re;
+      }
+      const double len = std::max(da.norm(), db.norm());
+      for (double f = 0;;) {
+        const Point2 a = seam.a[i] + f * da, b = seam.b[i] + f * db;
+        const double h = std::min(edge_at(spline, eval, a), edge_at(spline, eval, b));
+        detail::SeamTie t;
+        t.a = a;
+        t.b = b;
+        t.c0 = 1;
+        t.c1 = seam.sharp || !std::isfinite(h) ? 0.0 : 1.0;
+        const Vector2 tb = direction_b(i, f, h);
+        t.cross_b = Vector2(tb.y(), -tb.x());
+        t.cross_a = J * t.cross_b;
+        ties.push_back(t);
+        if (f >= 1) break;
+        const double step = std::isfinite(h) && len > 0 ? kSeamSpacing * h / len : 1.0;
+        f = std::min(1.0, f + std::max(step, 1e-3));
+        // The segment's end is the next one's start; the seam's last point is its own.
+        if (f >= 1 && i + 2 != P) break;
+      }
+    }
+  }
+  return ties;
+}
+
 }  // namespace
 
 std::string FitReport::to_json(bool with_times) const {
@@ -126,6 +392,16 @@ std::string FitReport::to_json(bool with_times) const {
   j["normals_estimated"] = normals_estimated;
   j["folds"] = folds;
   j["max_stretch"] = max_stretch;
+  j["charts"] = charts;
+  j["seams"] = seams;
+  j["closed"] = closed;
+  j["genus"] = genus;
+  j["seam_gap"] = seam_gap;
+  j["seam_gap_abs"] = seam_gap_abs;
+  j["seam_normal_jump"] = seam_normal_jump;
+  j["seam_crease_min"] = seam_crease_min;
+  j["seam_crease_max"] = seam_crease_max;
+  j["seam_samples_outside"] = seam_samples_outside;
   if (with_times) {
     j["memory_estimate"] = memory_estimate;
     j["seconds"] = seconds;
@@ -341,7 +617,9 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
                                        : std::clamp(static_cast<int>(N / 200), 32, 4000);
   progress("domain", "building the domain (about " + std::to_string(target) + " triangles)", 0);
   auto t0 = Clock::now();
-  detail::DomainInput din{scan.uv, scan.positions, scan.triangles, target, opt.features, opt.feature_angle};
+  detail::DomainInput din{scan.uv, scan.positions, scan.triangles, target, opt.features, opt.feature_angle,
+                          !scan.atlas.empty()};
+
   std::unique_ptr<detail::FitDomain> fdom_ptr;
   try {
     // Inside an arena of opt.threads: parts of the build are plain TBB loops.
@@ -351,6 +629,8 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
   }
   detail::FitDomain& fdom = *fdom_ptr;
   stage["domain"] += seconds_since(t0);
+  std::vector<detail::SeamTie> ties;
+  AlignedSeams seams{scan.atlas, {}};
 
   // The fairness term of a point is weighted by the squared longest edge of its domain
   // triangle: (h n.F_u)^2 is a length, like the distance term, so the weight is dimensionless
@@ -378,6 +658,7 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
     if (!previous_cp.empty() && previous_cp.size() == static_cast<size_t>(spline.control_point_count()))
       spline.control_points() = previous_cp;
     Evaluator eval(spline);
+    ties.clear();
 
     // Locate the points where the evaluator (and `tbs eval`) will: the domain builder keeps
     // every point of the region inside the domain; one it could not is left out and counted.
@@ -446,7 +727,7 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
           if (!jerk.empty()) jerk[t] = opt.smoothness * w * h4 * longest2[t];
         }
       }
-      return detail::FitPoints{scan.positions, normals, uv, located, order, start, fair, bend, jerk, weight};
+      return detail::FitPoints{scan.positions, normals, uv, located, order, start, fair, bend, jerk, weight, ties};
     };
     auto solve = [&] {
       const auto ts = Clock::now();
@@ -458,6 +739,14 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
                                        detail::Solver::Split, detail::row_cache_budget(N, n), &kept_rows);
       stage["solve"] += seconds_since(ts);
     };
+    if (!seams.atlas.empty()) {
+      // The first round: the charts fitted apart, their seams aligned where the surfaces meet,
+      // then tied (align_seams).
+      solve();
+      progress("solve", "aligning " + std::to_string(seams.atlas.seams.size()) + " seams with the fitted surfaces", 0);
+      seams = align_seams(scan.atlas, spline, eval, std::numeric_limits<double>::infinity());
+    }
+    ties = seam_ties(seams.atlas, seams.J, spline, eval);
     solve();
 
     // Errors per point.
@@ -492,7 +781,7 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
       // The knot search judges moves by the local points alone; the smoothness terms of the
       // global solve do not enter it. A pass after which the surface folds in more triangles
       // than before, or stretches beyond kMaxStretch and by more than 10 %, is undone.
-      ShapeCheck shape = check_shape(spline, eval, 8, opt.threads);
+      ShapeCheck shape = check_shape(spline, eval, 8, opt.threads, rep.tolerance_abs, seams.atlas);
       for (int sweep = 0; sweep < opt.knot_sweeps; ++sweep) {
         const auto ts = Clock::now();
         std::vector<double> tri_err(d.triangle_count(), 0.0);
@@ -531,7 +820,7 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
         if (st.moved == 0) break;
         solve();
         e = measure();
-        const ShapeCheck after = check_shape(spline, eval, 8, opt.threads);
+        const ShapeCheck after = check_shape(spline, eval, 8, opt.threads, rep.tolerance_abs, seams.atlas);
         if (after.folded_triangles.size() > shape.folded_triangles.size() ||
             after.max_stretch > std::max(1.1 * shape.max_stretch, kMaxStretch)) {
           // Undo: sub-knots first, then the primary knots in reverse order (each step back is
@@ -597,9 +886,23 @@ FitResult fit_scan(const Scan& scan, const FitOptions& opt) {
       rep.holes = static_cast<int>(spline.domain().boundary_loops().size()) - 1;
       rep.control_points = spline.control_point_count();
       rep.memory_estimate = estimate_fit_memory(N, n, static_cast<size_t>(rep.control_points));
-      const ShapeCheck shape = check_shape(spline, eval, 8, opt.threads);
+      const ShapeCheck shape = check_shape(spline, eval, 8, opt.threads, rep.tolerance_abs, seams.atlas);
       rep.folds = static_cast<int>(shape.folded_triangles.size());
       rep.max_stretch = shape.max_stretch;
+      rep.charts = domain_charts(spline.domain()).count;
+      rep.seams = static_cast<int>(scan.atlas.seams.size());
+      rep.closed = scan.atlas.closed;
+      rep.genus = scan.atlas.genus;
+      if (!scan.atlas.empty()) {
+        const SeamCheck check = check_seams(spline, eval, seams.atlas, 1000, opt.threads);
+        rep.seam_gap_abs = check.max_gap;
+        rep.seam_gap = check.max_gap / rep.scale;
+        rep.seam_normal_jump = check.max_normal_jump;
+        rep.seam_crease_min = check.min_crease;
+        rep.seam_crease_max = check.max_crease;
+        rep.seam_samples_outside = check.outside;
+      }
+      res.atlas = seams.atlas;
       res.spline = std::move(spline);
     };
     if (e.max <= rep.tolerance_abs) {

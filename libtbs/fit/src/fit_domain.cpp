@@ -53,6 +53,12 @@ using WVb = CGAL::Triangulation_vertex_base_with_info_2<int, K>;
 using WFb = CGAL::Triangulation_face_base_with_info_2<int, K, CGAL::Constrained_triangulation_face_base_2<K>>;
 using WCdt = CGAL::Constrained_Delaunay_triangulation_2<K, CGAL::Triangulation_data_structure_2<WVb, WFb>>;
 
+// Components of the region below this share of the largest's area are specks (outliers of a
+// point cloud), not charts of an atlas.
+constexpr double kChartShare = 1e-4;
+// The least distance, in target edges, from a chart's outline (its seams) to its domain's.
+constexpr double kChartMargin = 0.5;
+
 CPoint cp(const Point2& p) { return {p.x(), p.y()}; }
 Point2 ep(const CPoint& p) { return {p.x(), p.y()}; }
 
@@ -227,7 +233,7 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
   // One adjacency for both (it took a second for each of two builds on 1M bare points); a
   // Delaunay region comes with its neighbours.
   Adjacency adj = in.faces.empty() ? adjacency(region, n, std::move(across)) : adjacency(region, n);
-  keep_largest_component(region, in.uv, adj);
+  keep_largest_component(region, in.uv, adj, in.charts ? kChartShare : 2.0);
   m.excluded.assign(n, 1);
   double area = 0;
   Box2 box;
@@ -296,8 +302,12 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
 
   // Simplify, offset and mesh; retry with a tighter tolerance while a point is left outside.
   double tau = 0.5 * h;
+  double margin = kChartMargin * h;
   for (int attempt = 0;; ++attempt) {
     if (attempt >= 4) tau = 0;
+    // A chart's margin shrinks with the tolerance on each try: offset far, a narrow chart's
+    // outline can cross itself.
+    if (attempt > 0) margin *= 0.25;
     m.stats.boundary_tolerance = tau;
     // Boundary loops as polygons; `moved` holds where forced loop vertices ended up.
     std::unordered_map<int, Point2> moved;
@@ -365,7 +375,10 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
         // Every edge moves out by at least two grid steps, past its own end points too: the
         // snap below moves a vertex by at most 0.71 steps, so every point of the loop stays
         // strictly inside, as the evaluator locates it (hole loops as the outer one).
-        off[e] = off[e] > 0 ? off[e] + 0.05 * tau + 2 * m.grid : 2 * m.grid;
+        // The charts of an atlas keep a margin of kChartMargin h beyond their seams: the
+        // spline is tied there to the other side, and bends toward it within that margin.
+        const double least = std::max(2 * m.grid, in.charts ? margin : 0.0);
+        off[e] = off[e] > 0 ? std::max(off[e] + 0.05 * tau + 2 * m.grid, least) : least;
       }
       std::vector<Point2> poly;
       for (size_t e = 0; e < K2; ++e) {
@@ -459,7 +472,7 @@ FitDomain::FitDomain(const DomainInput& in) : impl_(std::make_unique<Impl>()) {
         if (segments_cross(bsegs[i][0], bsegs[i][1], bsegs[j][0], bsegs[j][1])) simple = false;
       });
     if (!simple) {
-      if (tau == 0)
+      if (tau == 0 && !(in.charts && margin > 2 * m.grid))
         throw InvalidInput("the boundary of the parameter region crosses itself; the parameterization "
                            "is not bijective");
       tau *= 0.25;

@@ -19,6 +19,10 @@ struct DomainInput {
   int target_triangles = 200;
   bool features = true;
   double feature_angle_deg = 40;
+  /// The parameters lie in several charts of an atlas: every component of the region the
+  /// points cover is kept (but specks below 1e-4 of the largest's area), not the largest alone,
+  /// and each keeps a margin beyond its outline.
+  bool charts = false;
 };
 
 struct DomainStats {

@@ -169,7 +169,7 @@ std::vector<std::vector<int>> boundary_loops(const Region& r, const Adjacency& a
 
 // Keeps the largest edge-connected component of a region; returns the dropped triangle count.
 // `adj` is the region's adjacency, made again for the kept triangles when some are dropped.
-size_t keep_largest_component(Region& r, std::span<const Point2> uv, Adjacency& adj) {
+size_t keep_largest_component(Region& r, std::span<const Point2> uv, Adjacency& adj, double keep_share) {
   const bool manifold = adj.duplicate.face < 0;
   std::vector<int> comp(r.tris.size(), -1);
   std::vector<double> area;
@@ -200,17 +200,20 @@ size_t keep_largest_component(Region& r, std::span<const Point2> uv, Adjacency& 
     }
   }
   if (area.size() <= 1) return 0;
-  const int best = static_cast<int>(std::max_element(area.begin(), area.end()) - area.begin());
+  const int largest = static_cast<int>(std::max_element(area.begin(), area.end()) - area.begin());
+  std::vector<char> keep(area.size(), 0);
+  for (size_t c = 0; c < area.size(); ++c) keep[c] = static_cast<int>(c) == largest || area[c] >= keep_share * area[largest];
+  if (std::count(keep.begin(), keep.end(), 1) == static_cast<long>(area.size())) return 0;
   // A kept triangle's neighbours are in its component: renumbered, they stay its neighbours
   // (taken over where each edge has at most the one neighbour, searched again otherwise).
   Region kept;
   std::vector<int> renumbered(r.tris.size(), -1);
   for (size_t f = 0; f < r.tris.size(); ++f)
-    if (comp[f] == best) renumbered[f] = static_cast<int>(kept.tris.size()), kept.tris.push_back(r.tris[f]);
+    if (keep[static_cast<size_t>(comp[f])]) renumbered[f] = static_cast<int>(kept.tris.size()), kept.tris.push_back(r.tris[f]);
   std::vector<std::array<int, 3>> across;
   if (manifold)
     for (size_t f = 0; f < r.tris.size(); ++f)
-      if (comp[f] == best) {
+      if (keep[static_cast<size_t>(comp[f])]) {
         std::array<int, 3> g = adj.across[f];
         for (int& q : g)
           if (q >= 0) q = renumbered[static_cast<size_t>(q)];

@@ -57,9 +57,10 @@ Region region_from_faces(std::span<const Point2> uv, std::span<const std::array<
 Region region_from_points(std::span<const Point2> uv, std::vector<std::array<int, 3>>& across);
 // The closed boundary loops of a region, as point indices; the outer loop first.
 std::vector<std::vector<int>> boundary_loops(const Region& r, const Adjacency& adj, size_t n_points);
-// Keeps the largest edge-connected part of the region (and renumbers adj); returns how many
-// triangles were dropped.
-size_t keep_largest_component(Region& r, std::span<const Point2> uv, Adjacency& adj);
+// Keeps the largest edge-connected part of the region, and every other part whose area is at
+// least keep_share times its (the charts of an atlas; above 1, none), and renumbers adj;
+// returns how many triangles were dropped.
+size_t keep_largest_component(Region& r, std::span<const Point2> uv, Adjacency& adj, double keep_share);
 // Takes back into the region the excluded points that duplicate a kept one's (u, v).
 void include_duplicates(std::span<const Point2> uv, std::vector<char>& excluded);
 // Douglas-Peucker on the open polyline p[i..j]: marks in keep the points it keeps (not the ends).

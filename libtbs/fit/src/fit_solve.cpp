@@ -234,6 +234,50 @@ struct KeptRows::Data {
   }
 };
 
+namespace {
+
+// A seam tie's rows (fit_solve.h) as one local system with unit weight: its support (the
+// control points of the rows at a and b, ascending) and the upper triangle of sum w r r^T,
+// row-major. Empty where a or b is outside the domain.
+void tie_system(const Evaluator& eval, const SeamTie& tie, BasisRow& ra, BasisRow& rb, std::vector<int>& S,
+                std::vector<double>* G) {
+  S.clear();
+  if (!eval.basis_row(tie.a, ra) || !eval.basis_row(tie.b, rb)) return;
+  S = ra.index;
+  S.insert(S.end(), rb.index.begin(), rb.index.end());
+  std::sort(S.begin(), S.end());
+  S.erase(std::unique(S.begin(), S.end()), S.end());
+  if (!G) return;
+  const size_t m = S.size();
+  // The two rows over S: the value, and the derivative across the seam.
+  std::vector<double> r0(m, 0.0), r1(m, 0.0);
+  auto at = [&](int j) { return static_cast<size_t>(std::lower_bound(S.begin(), S.end(), j) - S.begin()); };
+  for (size_t k = 0; k < ra.index.size(); ++k) {
+    const size_t q = at(ra.index[k]);
+    r0[q] += ra.value[k];
+    r1[q] -= tie.cross_a.x() * ra.du[k] + tie.cross_a.y() * ra.dv[k];
+  }
+  for (size_t k = 0; k < rb.index.size(); ++k) {
+    const size_t q = at(rb.index[k]);
+    r0[q] -= rb.value[k];
+    r1[q] += tie.cross_b.x() * rb.du[k] + tie.cross_b.y() * rb.dv[k];
+  }
+  // Each row scaled to unit length: a tie's strength does not depend on the size of the basis
+  // functions' values or derivatives there (the derivative rows are far longer than the value
+  // row, and grow as the domain is refined), only on its weight.
+  auto unit = [](std::vector<double>& r) {
+    double n2 = 0;
+    for (double x : r) n2 += x * x;
+    return n2 > 0 ? 1 / n2 : 0.0;
+  };
+  const double w0 = tie.c0 * unit(r0), w1 = tie.c1 * unit(r1);
+  G->assign(m * m, 0.0);
+  for (size_t a = 0; a < m; ++a)
+    for (size_t b = a; b < m; ++b) (*G)[a * m + b] = w0 * r0[a] * r0[b] + w1 * r1[a] * r1[b];
+}
+
+}  // namespace
+
 KeptRows::KeptRows() = default;
 KeptRows::~KeptRows() = default;
 
@@ -248,6 +292,9 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
   const int T = d.triangle_count();
   const int N = spline.control_point_count();
   const bool fair = lambda > 0;
+  // The seam ties take the places T .. T + K - 1 after the triangles in the support sets and
+  // the assembly: their systems are summed apart (Gt) and weighted once the data's scale is known.
+  const int K = static_cast<int>(pts.ties.size());
 
   // The control points each triangle's points touch (union of their basis rows), in parallel.
   struct Scratch {
@@ -269,12 +316,12 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
   auto bends = [&](int t) {
     return (!pts.bend.empty() && pts.bend[t] > 0) || (!pts.jerk.empty() && pts.jerk[t] > 0);
   };
-  auto idle = [&](int t) { return pts.start[t + 1] == pts.start[t] && !bends(t); };
+  auto idle = [&](int t) { return t < T && pts.start[t + 1] == pts.start[t] && !bends(t); };
   // Triangles with fewer points than control points of their own (beta_count) take the
   // composite rule; where the points outnumber them they decide the shape, one rule will do.
   const int own = beta_count(spline.degree());
   auto bend_level = [&](int t) { return pts.start[t + 1] - pts.start[t] >= own ? 1 : kBendLevel; };
-  std::vector<std::vector<int>> support(T), point_support(T);
+  std::vector<std::vector<int>> support(static_cast<size_t>(T) + K), point_support(T);
   // The pattern pass keeps its basis rows (of the points and of the smoothness samples) for
   // the assembly pass, triangle by triangle, while they fit in row_cache_bytes (the rest are
   // computed again); the same rows either way. With `kept`, triangles take the rows of the
@@ -302,6 +349,11 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
   if (times) times->kept_triangles += std::count(reuse.begin(), reuse.end(), 1);
   std::atomic<size_t> cached_bytes{reused_bytes};
   with_threads(threads, [&] {
+    tbb::parallel_for(0, K, [&](int k) {
+      Scratch& sc = scratch.local();
+      BasisRow rb;
+      tie_system(eval, pts.ties[static_cast<size_t>(k)], sc.row, rb, support[static_cast<size_t>(T + k)], nullptr);
+    });
     tbb::parallel_for(0, T, [&](int t) {
       if (idle(t)) return;
       Scratch& sc = scratch.local();
@@ -403,7 +455,7 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
   // (triangle, position of j in its support set) and the membrane partners k > j of each j.
   // (Named members, not structured bindings: clang before 16 cannot capture those.)
   const auto tri_of = by_point(std::pair<int, int>{}, [&](auto&& f) {
-    for (int t = 0; t < T; ++t)
+    for (int t = 0; t < T + K; ++t)
       for (size_t a = 0; a < support[t].size(); ++a) f(support[t][a], std::pair{t, static_cast<int>(a)});
   });
   const auto net_of = by_point(0, [&](auto&& f) {
@@ -440,6 +492,7 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
   if (times) times->pattern += since(t_stage);
   t_stage = Clock::now();
   std::vector<double> G(nnz, 0.0);
+  std::vector<double> Gt(K > 0 ? nnz : 0, 0.0);  // the seam ties, unit weight
   std::array<std::vector<double>, 6> F;
   if (fair)
     for (auto& f : F) f.assign(nnz, 0.0);
@@ -450,14 +503,19 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
   constexpr int kChunk = 128;
   std::vector<Local> locals(kChunk);
   std::vector<size_t> next_item(tri_start.begin(), tri_start.end() - 1);  // per row: its next triangle
-  for (int t0 = 0; t0 < T; t0 += kChunk) {
-    const int t1 = std::min(T, t0 + kChunk);
+  for (int t0 = 0; t0 < T + K; t0 += kChunk) {
+    const int t1 = std::min(T + K, t0 + kChunk);
     with_threads(threads, [&] {
       tbb::parallel_for(t0, t1, [&](int t) {
         Local& L = locals[t - t0];
         L.S.clear();
         if (idle(t)) return;
         Scratch& sc = scratch.local();
+        if (t >= T) {
+          BasisRow rb;
+          tie_system(eval, pts.ties[static_cast<size_t>(t - T)], sc.row, rb, L.S, &L.G);
+          return;
+        }
         L.S = support[t];
         const size_t m = L.S.size();
         for (size_t a = 0; a < m; ++a) sc.where[L.S[a]] = static_cast<int>(a);
@@ -572,6 +630,14 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
         for (; e < tri_start[j + 1] && tri_items[e].first < t1; ++e) {
           const Local& L = locals[tri_items[e].first - t0];
           const size_t a = static_cast<size_t>(tri_items[e].second), m = L.S.size();
+          if (tri_items[e].first >= T) {
+            size_t pos = row_start[j];
+            for (size_t b = a; b < m; ++b) {
+              while (cols[pos] != L.S[b]) ++pos;
+              Gt[pos] += L.G[a * m + b];
+            }
+            continue;
+          }
           for (int c = 0; c < 3; ++c) rhs[3 * static_cast<size_t>(j) + c] += L.rhs[3 * a + c];
           data_diag[j] += L.data_diag[a];
           // Columns L.S[a..] are sorted and a subset of row j's columns: merge walk.
@@ -617,6 +683,7 @@ std::vector<Point3> solve_control_points(const Spline& spline, const Evaluator& 
     const auto e = cols.begin() + static_cast<long>(row_start[j + 1]);
     return row_start[j] + static_cast<size_t>(std::lower_bound(b, e, k) - b);
   };
+  for (size_t pos = 0; pos < Gt.size(); ++pos) G[pos] += kTieWeight * diag * Gt[pos];
   for (auto [j, k] : net) {
     G[at(j, j)] += mu;
     G[at(k, k)] += mu;

@@ -19,6 +19,24 @@ namespace tbs::detail {
 /// small enough that the fit of well-covered regions moves by about this relative amount.
 inline constexpr double kRegularization = 1e-9;
 
+/// A tie across a seam of the atlas (METHOD.md section 10): the glued parameter points a and b
+/// should give one surface, F(a) = F(b), and where the seam is smooth one tangent plane: the
+/// derivative across the seam in b's chart, along cross_b, equals the derivative in a's chart
+/// along cross_a = J cross_b (J, the derivative of the map from b's chart to a's). Each row is
+/// scaled to unit length; the tie adds c0 |F(a) - F(b)|^2 + c1 |D_{cross_b} F(b) -
+/// D_{cross_a} F(a)|^2 of them, times kTieWeight and the mean diagonal of the data term, to the
+/// energy: linear terms in the control points, the same for x, y and z, solved with the rest.
+struct SeamTie {
+  Point2 a, b;
+  double c0 = 1;  ///< weight of the gap
+  double c1 = 0;  ///< weight of the cross derivative (0: a crease)
+  Vector2 cross_a = Vector2::Zero(), cross_b = Vector2::Zero();
+};
+
+/// Weight of the seam ties against the data term: strong enough that the two sides of a seam
+/// meet far inside the tolerance, weak enough to keep the system well conditioned.
+inline constexpr double kTieWeight = 1e4;
+
 struct FitPoints {
   std::span<const Point3> p;
   std::span<const Vector3> n;       // unit normals
@@ -35,6 +53,8 @@ struct FitPoints {
   std::span<const double> jerk = {};
   /// Per-point weight of the distance and fairness terms (empty: 1); guides have less.
   std::span<const double> weight = {};
+  /// Seam ties (empty without an atlas).
+  std::span<const SeamTie> ties = {};
   double fair_weight(int i) const { return (fair.empty() ? 1.0 : fair[i]) * point_weight(i); }
   double point_weight(int i) const { return weight.empty() ? 1.0 : weight[i]; }
 };

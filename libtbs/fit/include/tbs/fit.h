@@ -121,6 +121,23 @@ struct FitReport {
   /// resolution 8) and the largest stretch of its parameterization (ShapeCheck::max_stretch).
   int folds = 0;
   double max_stretch = 0;
+  /// The atlas (Scan::atlas): charts (components of the domain), seams, whether the glued
+  /// surface is closed, and its genus. 1 chart, 0 seams for a scan over one planar domain.
+  int charts = 1;
+  int seams = 0;
+  bool closed = false;
+  int genus = 0;
+  /// Along the seams (check_seams(), 1,000 samples per seam): the largest distance between
+  /// glued points (relative, and in model units), the largest angle between the normals of
+  /// glued points where the seam is smooth (degrees), and the smallest and largest crease
+  /// angle where it is sharp (0 without sharp seams).
+  double seam_gap = 0;
+  double seam_gap_abs = 0;
+  double seam_normal_jump = 0;
+  double seam_crease_min = 0, seam_crease_max = 0;
+  /// Seam samples where a side lies outside the domain (left out of the above; 0 when every
+  /// seam lies in its charts).
+  size_t seam_samples_outside = 0;
   /// estimate_fit_memory() for the points, degree and control points of the result, in bytes
   /// (in the JSON with the times: it describes the run, not the spline).
   size_t memory_estimate = 0;
@@ -160,6 +177,8 @@ struct FitReport {
 
 struct FitResult {
   Spline spline;
+  /// The scan's atlas (its seams, closed, genus), for the .tbs; empty without one.
+  Atlas atlas;
   FitReport report;
   std::vector<Point2> uv;       ///< the parameters used, one per input point
   std::vector<double> error;    ///< |p - F(u)| per input point, model units
