@@ -7,12 +7,12 @@
 #include <tbs/cad_regions.h>
 #include <tbs/extract.h>
 
-#include <TopoDS_Shell.hxx>
+#include <TopoDS_Shape.hxx>
 
 namespace tbs::detail {
 
 struct ShellResult {
-  TopoDS_Shell shell;
+  TopoDS_Shape shell;  // a shell, or a compound of shells (parts that share no edge)
   size_t faces = 0;
   double max_edge_tolerance = 0;  // the largest measured edge gap, as written
 };

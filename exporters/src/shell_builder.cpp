@@ -2,10 +2,17 @@
 
 #include <BRep_Builder.hxx>
 #include <Precision.hxx>
+#include <TopExp.hxx>
+#include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
+#include <TopTools_ListIteratorOfListOfShape.hxx>
 #include <TopoDS.hxx>
+#include <TopoDS_Compound.hxx>
 #include <TopoDS_Wire.hxx>
 
 #include <algorithm>
+#include <map>
+#include <numeric>
 
 namespace tbs::detail {
 
@@ -102,7 +109,7 @@ void ShellBuilder::add_face(const Handle(Geom_Surface)& s, const std::vector<std
   ++faces_;
 }
 
-TopoDS_Shell ShellBuilder::finish() {
+TopoDS_Shape ShellBuilder::finish() {
   BRep_Builder b;
   std::vector<double> vertex_tol(vertices_.size());
   for (size_t v = 0; v < vertices_.size(); ++v) vertex_tol[v] = kSpare * vertex_gap_[v] + Precision::Confusion();
@@ -118,7 +125,47 @@ TopoDS_Shell ShellBuilder::finish() {
   for (size_t v = 0; v < vertices_.size(); ++v)
     b.UpdateVertex(vertices_[v], points_[v], vertex_tol[v]);
   shell_.Closed(Standard_False);
-  return shell_;
+  // A shell must be connected (BRepCheck refuses one that is not): faces that share no edge,
+  // the charts of an atlas or the components of a domain, go into shells of their own, in a
+  // compound. One part stays the shell it is.
+  TopTools_IndexedMapOfShape faces;
+  TopExp::MapShapes(shell_, TopAbs_FACE, faces);
+  TopTools_IndexedDataMapOfShapeListOfShape faces_of;
+  TopExp::MapShapesAndAncestors(shell_, TopAbs_EDGE, TopAbs_FACE, faces_of);
+  std::vector<int> part(static_cast<size_t>(faces.Extent()));
+  std::iota(part.begin(), part.end(), 0);
+  auto find = [&](int x) {
+    while (part[static_cast<size_t>(x)] != x) x = part[static_cast<size_t>(x)] = part[static_cast<size_t>(part[static_cast<size_t>(x)])];
+    return x;
+  };
+  for (int i = 1; i <= faces_of.Extent(); ++i) {
+    int first = -1;
+    for (TopTools_ListIteratorOfListOfShape it(faces_of(i)); it.More(); it.Next()) {
+      const int f = faces.FindIndex(it.Value()) - 1;
+      if (first < 0)
+        first = f;
+      else
+        part[static_cast<size_t>(find(f))] = find(first);
+    }
+  }
+  std::map<int, TopoDS_Shell> shells;
+  for (int f = 0; f < faces.Extent(); ++f) {
+    const int r = find(f);
+    if (!shells.count(r)) {
+      TopoDS_Shell s;
+      b.MakeShell(s);
+      shells[r] = s;
+    }
+    b.Add(shells[r], faces(f + 1));
+  }
+  if (shells.size() <= 1) return shell_;
+  TopoDS_Compound c;
+  b.MakeCompound(c);
+  for (auto& [r, s] : shells) {
+    s.Closed(Standard_False);
+    b.Add(c, s);
+  }
+  return c;
 }
 
 }  // namespace tbs::detail

@@ -8,6 +8,7 @@
 #include <Geom_Surface.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
+#include <TopoDS_Shape.hxx>
 #include <TopoDS_Shell.hxx>
 #include <TopoDS_Vertex.hxx>
 #include <gp_Pnt.hxx>
@@ -38,10 +39,11 @@ class ShellBuilder {
   // A face on surface s bounded by the wires (the first is the outer one).
   void add_face(const Handle(Geom_Surface)& s, const std::vector<std::vector<Use>>& wires);
 
-  // The shell. Edge tolerances are the largest distance measured between each edge's 3D curve
+  // The shell, or where the faces fall into parts that share no edge, a compound of one shell
+  // per part. Edge tolerances are the largest distance measured between each edge's 3D curve
   // and its curves on the faces' surfaces (plus OCCT's confusion distance), vertex tolerances
   // cover the edges and curve ends at them.
-  TopoDS_Shell finish();
+  TopoDS_Shape finish();
 
   size_t face_count() const { return faces_; }
   double max_edge_tolerance() const { return max_edge_tolerance_; }
