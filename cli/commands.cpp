@@ -100,6 +100,15 @@ int run_info(const InfoOptions& o) {
   }
   j["boundary_loops"] = d.boundary_loops().size();
   j["holes"] = holes;
+  {
+    int sharp = 0;
+    for (const Seam& seam : f.atlas.seams) sharp += seam.sharp;
+    j["atlas"] = {{"charts", domain_charts(d).count},
+                  {"seams", f.atlas.seams.size()},
+                  {"sharp_seams", sharp},
+                  {"closed", f.atlas.closed},
+                  {"genus", f.atlas.genus}};
+  }
   j["feature_edges"] = d.feature_edges().size();
   const Box2 db = d.bounding_box();
   j["domain_bbox"] = box_json(db.min, db.max);
@@ -139,14 +148,32 @@ int run_info(const InfoOptions& o) {
   if (check.ok()) {
     j["surface_bbox"] = box_json(sampled_surface_box(s));
     const Evaluator eval(s);
-    const ShapeCheck shape = check_shape(s, eval);
+    // Folds are reversals within the fit's tolerance, where the metadata gives it.
+    double fold_tolerance = 0;
+    {
+      const json meta = json::parse(f.metadata_json);
+      if (meta.contains("fit") && meta["fit"].is_object() && meta["fit"].contains("tolerance_abs") &&
+          meta["fit"]["tolerance_abs"].is_number() && meta["fit"]["tolerance_abs"].get<double>() > 0)
+        fold_tolerance = meta["fit"]["tolerance_abs"].get<double>();
+    }
+    const ShapeCheck shape = check_shape(s, eval, 8, 0, fold_tolerance, f.atlas);
     j["shape"] = {{"folds", shape.folded_triangles.size()},
                   {"folded_triangles", shape.folded_triangles},
                   {"max_normal_turn_degrees", shape.max_normal_turn},
                   {"max_stretch", shape.max_stretch},
-                  {"note", "folds: domain triangles where the normal reverses (neighbouring samples more than 90 "
-                           "degrees apart, 8 x 8 per triangle and across smooth edges); max_stretch: largest "
-                           "|F_u|, |F_v| x domain diameter / model size"}};
+                  {"note", "folds: domain triangles where the surface turns back over itself (its normal turns by "
+                           "more than 150 degrees between points within the fit's tolerance, or 1e-3 of the model "
+                           "size; 8 x 8 samples per triangle and across smooth edges, looked at closely where they "
+                           "turn by more than 90 degrees); max_stretch: largest |F_u|, |F_v| x chart diameter / "
+                           "chart size"}};
+    if (!f.atlas.empty()) {
+      const SeamCheck seams = check_seams(s, eval, f.atlas, 1000);
+      j["atlas"]["seam_gap"] = seams.max_gap;
+      j["atlas"]["seam_normal_jump_degrees"] = seams.max_normal_jump;
+      j["atlas"]["seam_crease_degrees"] = {seams.min_crease, seams.max_crease};
+      j["atlas"]["seam_samples"] = seams.samples;
+      j["atlas"]["seam_samples_outside"] = seams.outside;
+    }
   }
   j["metadata"] = json::parse(f.metadata_json);
 
@@ -305,7 +332,9 @@ void print_parameterization(const ParameterizeReport& p) {
   if (p.subdivisions)
     std::printf("%-18s %d x 1-to-4: %zu points added on a smooth surface through the vertices (--min-points)\n",
                 "subdivided", p.subdivisions, p.points_added);
-  if (p.seam_edges) std::printf("%-18s closed surface cut open along %zu edges (a domain boundary now)\n", "seam", p.seam_edges);
+  if (p.charts > 1 || p.seams > 0)
+    std::printf("%-18s %d charts, cut along %zu edges (%zu seams); flattening stretch %.3g\n", "charts", p.charts,
+                p.seam_edges, p.seams, p.stretch);
   std::printf("%-18s %s%s\n", "flattening", p.method.c_str(),
               p.fallback_reason.empty() ? "" : (" (" + p.fallback_reason + ")").c_str());
   std::printf("%-18s angle %.3f mean, %.3g max; area %.3f mean, %.3g max (1 = none)\n", "distortion",
@@ -386,6 +415,7 @@ int fit_and_write(const FitCommandOptions& o, ParameterizedScan* pscan, const Sc
     meta["parameterization"] = pj;
   }
   SplineFile file{r.spline, o.units, meta.dump(-1, ' ', false, json::error_handler_t::replace)};
+  file.atlas = r.atlas;
   const bool keep = o.keep_points;
   // The measured points and their parameters, without the guides of a subdivided mesh (they
   // come after the vertices): what --keep-points stores and error maps show. Copied only
@@ -432,7 +462,16 @@ int fit_and_write(const FitCommandOptions& o, ParameterizedScan* pscan, const Sc
   std::printf("%-18s %.3e (%.4g %s)\n", "tolerance", rep.tolerance, rep.tolerance_abs, o.units.c_str());
   std::printf("%-18s %s (%s)\n", "converged", rep.converged ? "yes" : "no", rep.stop_reason.c_str());
   std::printf("%-18s %d domain triangle(s)%s\n", "folds", rep.folds, rep.folds > 0 ? " (the normal reverses)" : "");
-  std::printf("%-18s %.3g (largest |F_u|, |F_v| x domain diameter / model size)\n", "max stretch", rep.max_stretch);
+  std::printf("%-18s %.3g (largest |F_u|, |F_v| x chart diameter / chart size)\n", "max stretch", rep.max_stretch);
+  std::printf("%-18s %d chart%s, %d seam%s; %s, genus %d\n", "atlas", rep.charts, rep.charts == 1 ? "" : "s", rep.seams,
+              rep.seams == 1 ? "" : "s", rep.closed ? "closed" : "open", rep.genus);
+  if (rep.seams > 0)
+    std::printf("%-18s gap %.3e (%.4g %s), normal jump %.3g degrees (smooth seams)%s\n", "seams", rep.seam_gap,
+                rep.seam_gap_abs, o.units.c_str(), rep.seam_normal_jump,
+                rep.seam_crease_max > 0 ? (", creases " + std::to_string(static_cast<int>(std::lround(rep.seam_crease_min))) +
+                                           " to " + std::to_string(static_cast<int>(std::lround(rep.seam_crease_max))) +
+                                           " degrees").c_str()
+                                        : "");
   std::printf("%-18s %.2f s\n", "time", rep.seconds + (param ? param->seconds : 0.0));
   // --export: each file as `tbs convert OUT.tbs FILE` would write it (error maps from the scan
   // or from the points kept in the .tbs).

@@ -58,12 +58,83 @@ py::array_t<int> faces_array(const std::vector<std::array<int, 3>>& faces) {
 
 py::object json_loads(const std::string& text) { return py::module_::import("json").attr("loads")(text); }
 
+std::vector<tbs::Point2> points2(const py::handle& h, const std::string& what) {
+  const Array a = checked(py::cast<Array>(h), 2, what.c_str());
+  auto r = a.unchecked<2>();
+  std::vector<tbs::Point2> out;
+  for (py::ssize_t i = 0; i < a.shape(0); ++i) out.emplace_back(r(i, 0), r(i, 1));
+  return out;
+}
+
+// An atlas as a dict: closed, genus, seams (a, b, sharp), borders; and back.
+py::dict atlas_dict(const tbs::Atlas& atlas) {
+  py::list seams, borders;
+  for (const tbs::Seam& s : atlas.seams) {
+    py::dict d;
+    d["a"] = to_array(s.a, 2);
+    d["b"] = to_array(s.b, 2);
+    d["sharp"] = s.sharp;
+    seams.append(d);
+  }
+  for (const auto& b : atlas.borders) borders.append(to_array(b, 2));
+  py::dict d;
+  d["closed"] = atlas.closed;
+  d["genus"] = atlas.genus;
+  d["seams"] = seams;
+  d["borders"] = borders;
+  return d;
+}
+
+tbs::Atlas atlas_from(const py::dict& d) {
+  tbs::Atlas atlas;
+  if (d.contains("closed")) atlas.closed = d["closed"].cast<bool>();
+  if (d.contains("genus")) atlas.genus = d["genus"].cast<int>();
+  if (d.contains("seams"))
+    for (const py::handle& h : d["seams"].cast<py::list>()) {
+      const py::dict sd = h.cast<py::dict>();
+      tbs::Seam s;
+      s.a = points2(sd["a"], "atlas seam a");
+      s.b = points2(sd["b"], "atlas seam b");
+      if (sd.contains("sharp")) s.sharp = sd["sharp"].cast<bool>();
+      atlas.seams.push_back(std::move(s));
+    }
+  if (d.contains("borders"))
+    for (const py::handle& h : d["borders"].cast<py::list>()) atlas.borders.push_back(points2(h, "atlas border"));
+  tbs::check_atlas_structure(atlas, "atlas");
+  return atlas;
+}
+
 // A fitted or loaded spline with its evaluator (built on first use).
 class PySpline {
  public:
-  PySpline(tbs::Spline spline, std::string report_json, std::string units)
+  PySpline(tbs::Spline spline, std::string report_json, std::string units, tbs::Atlas atlas = {})
       : spline_(std::make_unique<tbs::Spline>(std::move(spline))), report_(std::move(report_json)),
-        units_(std::move(units)) {}
+        units_(std::move(units)), atlas_(std::move(atlas)) {}
+
+  py::dict atlas() const { return atlas_dict(atlas_); }
+  py::list outlines() const {
+    py::list out;
+    for (const auto& loop : tbs::chart_outlines(atlas_)) out.append(to_array(loop, 2));
+    return out;
+  }
+  // The seams' agreement (check_seams): gap and normal angles, per seam too.
+  py::dict check_seams(int samples) const {
+    tbs::SeamCheck c;
+    {
+      py::gil_scoped_release release;
+      c = tbs::check_seams(*spline_, evaluator(), atlas_, samples);
+    }
+    py::dict d;
+    d["samples"] = c.samples;
+    d["outside"] = c.outside;
+    d["max_gap"] = c.max_gap;
+    d["max_normal_jump"] = c.max_normal_jump;
+    d["min_crease"] = c.min_crease;
+    d["max_crease"] = c.max_crease;
+    d["seam_gap"] = c.seam_gap;
+    d["seam_angle"] = c.seam_angle;
+    return d;
+  }
 
   int degree() const { return spline_->degree(); }
   int triangle_count() const { return spline_->domain().triangle_count(); }
@@ -121,6 +192,7 @@ class PySpline {
 
   void save(const std::string& path) const {
     tbs::SplineFile f{*spline_, units_ == "" ? "unitless" : units_, report_.empty() ? "{}" : report_};
+    f.atlas = atlas_;
     tbs::write_tbs(path, f);
   }
 
@@ -157,7 +229,8 @@ class PySpline {
         meta = json_module.attr("dumps")(wrapped).cast<std::string>();
       }
     }
-    const tbs::SplineFile file{*spline_, units_.empty() ? "unitless" : units_, meta};
+    tbs::SplineFile file{*spline_, units_.empty() ? "unitless" : units_, meta};
+    file.atlas = atlas_;
     std::string json;
     {
       py::gil_scoped_release release;
@@ -174,6 +247,7 @@ class PySpline {
   std::unique_ptr<tbs::Spline> spline_;  // on the heap: the evaluator keeps a reference to it
   std::string report_;
   std::string units_;
+  tbs::Atlas atlas_;
   mutable std::unique_ptr<tbs::Evaluator> evaluator_;
 };
 
@@ -225,12 +299,14 @@ PySpline fit(const Array& points, const std::optional<Array>& uv, const std::opt
              const std::optional<Faces>& faces, int degree,
              double tolerance, double tolerance_abs, double fairness, double bending, double smoothness, double feature_angle,
              bool features, int triangles, int knot_sweeps, int max_iterations, int threads,
-             const std::optional<py::function>& progress, const std::optional<Array>& guide) {
+             const std::optional<py::function>& progress, const std::optional<Array>& guide,
+             const std::optional<py::dict>& atlas) {
   if (!uv)
     throw tbs::InvalidInput(
         "uv is required: the module fits points with parameters; tbs.parameterize(points, faces) "
         "computes them for a raw scan, as `tbs fit` does");
   tbs::Scan scan = scan_from(points, uv, normals, faces);
+  if (atlas) scan.atlas = atlas_from(*atlas);
   if (guide) {
     const py::array_t<double, py::array::c_style | py::array::forcecast> g(*guide);
     if (g.ndim() != 1 || g.shape(0) != static_cast<py::ssize_t>(scan.positions.size()))
@@ -268,7 +344,7 @@ PySpline fit(const Array& points, const std::optional<Array>& uv, const std::opt
     py::gil_scoped_release release;
     r = tbs::fit(scan, o);
   }
-  return PySpline(std::move(r.spline), r.report.to_json(true), "unitless");
+  return PySpline(std::move(r.spline), r.report.to_json(true), "unitless", std::move(r.atlas));
 }
 
 // Parameters for a raw scan, as `tbs fit` computes them before it fits: a mesh is repaired,
@@ -320,12 +396,13 @@ py::dict parameterize(const Array& points, const std::optional<Faces>& faces, co
     d["guide"] = guide;
   }
   d["report"] = json_loads(p.report.to_json());
+  d["atlas"] = p.scan.atlas.empty() ? py::object(py::none()) : py::object(atlas_dict(p.scan.atlas));
   return d;
 }
 
 PySpline load(const std::string& path) {
   tbs::SplineFile f = tbs::read_tbs(path);
-  return PySpline(std::move(f.spline), f.metadata_json, f.units);
+  return PySpline(std::move(f.spline), f.metadata_json, f.units, std::move(f.atlas));
 }
 
 py::dict read_scan(const std::string& path, size_t max_points) {
@@ -390,6 +467,17 @@ PYBIND11_MODULE(tbs, m) {
            "A watertight triangle mesh: dict of positions (V, 3), normals (V, 3), uv (V, 2), faces "
            "(F, 3) and max_chordal_deviation. Adaptive to chordal_tolerance (of the model size), "
            "or uniform with resolution > 0.")
+      .def_property_readonly("atlas", &PySpline::atlas,
+                             "The atlas: dict of closed, genus, seams (list of dicts: a, b (N, 2) glued point "
+                             "for point, sharp) and borders (list of (N, 2) arrays); no seams for a spline over "
+                             "one planar domain.")
+      .def("outlines", &PySpline::outlines,
+           "The charts' outlines: closed loops ((N, 2) arrays, first point not repeated) of seam sides and "
+           "borders, each chart on the left; the trimmed surface is inside them (even-odd rule).")
+      .def("check_seams", &PySpline::check_seams, py::arg("samples") = 1000,
+           "How well the seams' two sides agree, at `samples` points per seam: dict of max_gap (model "
+           "units), max_normal_jump (degrees, smooth seams), min_crease and max_crease (sharp seams), "
+           "and per seam seam_gap and seam_angle.")
       .def("save", &PySpline::save, py::arg("path"), "Writes a .tbs file (atomically).")
       .def("export", &PySpline::export_file, py::arg("path"), py::arg("faces") = "regions",
            py::arg("cad_tolerance") = 0.0, py::arg("angle_tolerance") = 1.0, py::arg("face_degree") = 5,
@@ -408,23 +496,25 @@ PYBIND11_MODULE(tbs, m) {
         py::arg("bending") = 1e-4, py::arg("smoothness") = 3e-6, py::arg("feature_angle") = 40.0, py::arg("features") = true,
         py::arg("triangles") = 0, py::arg("knot_sweeps") = 3, py::arg("max_iterations") = 25,
         py::arg("threads") = 0, py::arg("progress") = py::none(), py::arg("guide") = py::none(),
+        py::arg("atlas") = py::none(),
         "Fits one spline to points (N, 3) with parameters uv (N, 2), as `tbs fit` does (the "
         "options and defaults are the same). faces (F, 3), the scan's triangles when it is a "
         "mesh, let the fit find sharp edges from the dihedral angles, as the command does. guide (N,), "
         "nonzero for guide points (parameterize() returns it for a subdivided mesh): held with a "
-        "tenth of the weight, their errors not measured. progress(stage, message, fraction) is called "
+        "tenth of the weight, their errors not measured. atlas, as parameterize() returns it for a closed "
+        "or cut surface, ties the charts' seams. progress(stage, message, fraction) is called "
         "between steps; returning False cancels the fit (raises Cancelled), as does Ctrl-C.");
   m.def("parameterize", &parameterize, py::arg("points"), py::arg("faces") = py::none(),
         py::arg("normals") = py::none(), py::arg("method") = "auto", py::arg("component") = 0,
         py::arg("min_points") = 0, py::arg("sharp_angle") = 40.0, py::arg("progress") = py::none(),
         "Parameters (u, v) for a scan without them, as `tbs fit` computes them: a mesh (faces (F, "
-        "3)) is repaired, its component `component` (1 = the largest; 0 the same) chosen, cut open if "
-        "closed and flattened (method 'auto': LSCM, relaxed toward equal areas where it shrinks parts "
+        "3)) is repaired, its component `component` (1 = the largest; 0 the same) chosen, cut into "
+        "charts (an atlas) if closed, with handles or too stretched by one flattening, and flattened (method 'auto': LSCM, relaxed toward equal areas where it shrinks parts "
         "of the surface tenfold on average, or mean-value coordinates if LSCM folds; 'lscm', the "
         "conformal map alone; 'mean-value'); a point cloud (faces None) is meshed first. min_points > 0 subdivides a coarse "
         "mesh 1-to-4 until it has that many points. Returns a dict: points (M, 3), uv (M, 2), faces "
         "(F, 3) or None, normals (M, 3) or None, guide (M,) or None (True for the points the "
-        "subdivision added), which fit() takes as they are; source (M,), the input point of each point; report, as `tbs fit --report` gives it under parameterization. "
+        "subdivision added), atlas (a dict as Spline.atlas, or None: the charts' seams when the surface was cut into charts), which fit() takes as they are; source (M,), the input point of each point; report, as `tbs fit --report` gives it under parameterization. "
         "progress(line) is called between steps.");
   m.def("load", &load, py::arg("path"), "Reads a .tbs file.");
   m.def("read_scan", &read_scan, py::arg("path"), py::arg("max_points") = 50'000'000,
