@@ -443,28 +443,49 @@ TEST(CliFit, ComponentsOneOrAll) {
   EXPECT_NE(r.out.find("component          1 of 2: " + std::to_string(big) + " vertices"), std::string::npos) << r.out;
 }
 
-TEST(CliFit, HigherGenusIsRefusedWithItsTopology) {
+TEST(CliFit, ATorusIsFittedOverAnAtlasAndInfoReportsIt) {
   const fs::path dir = temp_dir();
   const fs::path in = dir / "torus.off", out = dir / "torus.tbs";
   {
-    const int n = 10;
+    const int n = 32, m = 16;
     std::ofstream f(in);
-    f << "OFF\n" << n * n << " " << 2 * n * n << " 0\n";
-    for (int j = 0; j < n; ++j)
+    f.precision(17);
+    f << "OFF\n" << n * m << " " << 2 * n * m << " 0\n";
+    for (int j = 0; j < m; ++j)
       for (int i = 0; i < n; ++i) {
-        const double a = 2 * M_PI * i / n, b = 2 * M_PI * j / n;
+        const double a = 2 * M_PI * i / n, b = 2 * M_PI * j / m;
         f << (2 + std::cos(b)) * std::cos(a) << " " << (2 + std::cos(b)) * std::sin(a) << " " << std::sin(b) << "\n";
       }
-    auto id = [&](int i, int j) { return (j % n) * n + (i % n); };
-    for (int j = 0; j < n; ++j)
+    auto id = [&](int i, int j) { return (j % m) * n + (i % n); };
+    for (int j = 0; j < m; ++j)
       for (int i = 0; i < n; ++i)
         f << "3 " << id(i, j) << " " << id(i + 1, j) << " " << id(i + 1, j + 1) << "\n3 " << id(i, j) << " "
           << id(i + 1, j + 1) << " " << id(i, j + 1) << "\n";
   }
-  const Result r = run("fit '" + in.string() + "' -o '" + out.string() + "'");
-  EXPECT_EQ(r.code, 3);
-  EXPECT_NE(r.err.find("torus.off: component 1 of 1 has 100 vertices, 0 boundary loops, genus 1"), std::string::npos) << r.err;
-  EXPECT_FALSE(fs::exists(out));
+  const Result r = run("fit '" + in.string() + "' -o '" + out.string() + "' --quiet");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("closed, genus 1"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("charts             "), std::string::npos) << r.out;
+  // A closed torus needs no --component or cutting of its own; refusing it would be wrong.
+  const SplineFile f = read_tbs(out.string());
+  EXPECT_TRUE(f.atlas.closed);
+  EXPECT_EQ(f.atlas.genus, 1);
+  EXPECT_FALSE(f.atlas.seams.empty());
+  EXPECT_EQ(json::parse(read_file(out.string()))["version"], 2);
+  const Result info = run("info '" + out.string() + "'");
+  ASSERT_EQ(info.code, 0) << info.err;
+  const json j = json::parse(info.out);
+  EXPECT_EQ(j["atlas"]["closed"], true);
+  EXPECT_EQ(j["atlas"]["genus"], 1);
+  EXPECT_EQ(j["atlas"]["seams"], f.atlas.seams.size());
+  EXPECT_GE(j["atlas"]["charts"].get<int>(), 1);
+  EXPECT_EQ(j["atlas"]["seam_samples"], 1000 * f.atlas.seams.size());
+  EXPECT_EQ(j["atlas"]["seam_samples_outside"], 0);
+  const json meta = json::parse(f.metadata_json);
+  EXPECT_EQ(j["atlas"]["seam_gap"], meta["fit"]["seam_gap_abs"]);
+  EXPECT_EQ(meta["fit"]["genus"], 1);
+  EXPECT_EQ(meta["fit"]["closed"], true);
+  EXPECT_EQ(meta["parameterization"]["charts"], j["atlas"]["charts"]);
 }
 
 TEST(CliFit, BadOptionsAndFiles) {

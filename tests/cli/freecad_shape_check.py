@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """FreeCAD (Debian's freecad-python3) reads a STEP or IGES file that `tbs convert` wrote and
-finds what its report says: a valid shape, one shell, the reported number of faces, and free
-edges forming one closed loop per boundary loop of the spline's domain (the outer boundary and
-each hole).
+finds what its report says: a valid shape, one shell per chart of the spline's domain (its
+edge-connected components: one, unless the fit cut the surface into an atlas of charts), the
+reported number of faces, and free edges forming one closed loop per boundary loop of the
+domain (each chart's outer boundary and holes).
 
 usage: freecad_shape_check.py SPLINE.tbs REPORT.json CAD_FILE [CAD_FILE...]
   REPORT.json: `tbs convert --report` of the first file; every file must hold the same faces.
@@ -21,7 +22,28 @@ import Part  # noqa: E402
 spline, report_path = sys.argv[1:3]
 files = sys.argv[3:]
 report = json.load(open(report_path))
-loops = len(json.load(open(spline))["domain"]["boundary_loops"])
+domain = json.load(open(spline))["domain"]
+loops = len(domain["boundary_loops"])
+# The charts: triangles joined across shared edges.
+parent = list(range(len(domain["triangles"])))
+
+
+def find(x):
+    while parent[x] != x:
+        parent[x] = parent[parent[x]]
+        x = parent[x]
+    return x
+
+
+first = {}
+for t, tri in enumerate(domain["triangles"]):
+    for k in range(3):
+        e = tuple(sorted((tri[k], tri[(k + 1) % 3])))
+        if e in first:
+            parent[find(t)] = find(first[e])
+        else:
+            first[e] = t
+charts = len({find(t) for t in range(len(parent))})
 failures = []
 
 
@@ -36,10 +58,10 @@ for path in files:
     shape = Part.Shape()
     shape.read(path)
     check(shape.isValid(), f"{name}: FreeCAD finds the shape valid")
-    check(len(shape.Shells) == 1, f"{name}: one shell (found {len(shape.Shells)})")
+    check(len(shape.Shells) == charts, f"{name}: {len(shape.Shells)} shell(s), one per chart ({charts})")
     check(len(shape.Faces) == report["faces"], f"{name}: {len(shape.Faces)} faces read, {report['faces']} written")
-    if len(shape.Shells) == 1:
-        free = Part.sortEdges(shape.Shells[0].getFreeEdges().Edges)
+    if len(shape.Shells) == charts:
+        free = [w for shell in shape.Shells for w in Part.sortEdges(shell.getFreeEdges().Edges)]
         closed = all(Part.Wire(w).isClosed() for w in free)
         check(len(free) == loops and closed,
               f"{name}: free edges form {len(free)} loop(s), all closed: {closed} (the domain has {loops})")

@@ -1,5 +1,6 @@
-// Parameters for scans without them: topology, repairs, seam cuts, LSCM and its fallback, point
+// Parameters for scans without them: topology, repairs, charts and seams, LSCM and its fallback, point
 // clouds, subdivision; and real meshes from Debian's libcgal-demo.
+#include <tbs/atlas.h>
 #include <tbs/errors.h>
 #include <tbs/fit.h>
 #include <tbs/parameterize.h>
@@ -184,9 +185,19 @@ TEST(Parameterize, NearClosedSurfaceIsRelaxedTowardEqualAreas) {
     in.triangles.push_back(t);
   }
   ASSERT_EQ(mesh_topology(in.positions.size(), in.triangles).boundary_loops, 2);
-  const ParameterizedScan p = parameterize_scan(in);
+  // The relaxed map still stretches more than the chart bound (the default then cuts the
+  // surface into charts): here the one flattening is looked at, without a bound.
+  ParameterizeOptions one;
+  one.chart_stretch = std::numeric_limits<double>::infinity();
+  const ParameterizedScan p = parameterize_scan(in, one);
   expect_bijective(p.scan);
   EXPECT_EQ(p.report.method, "LSCM, areas relaxed");
+  EXPECT_TRUE(p.scan.atlas.empty());
+  // At the default bound it is cut into charts that stretch less.
+  const ParameterizedScan cut = parameterize_scan(in);
+  EXPECT_GT(cut.report.charts, 1);
+  EXPECT_LE(cut.report.stretch, ParameterizeOptions().chart_stretch);
+  EXPECT_GT(p.report.stretch, cut.report.stretch);
   EXPECT_GT(p.report.conformal.area_mean, 10);
   // Halfway on a log scale: the area ratios fall to about their square roots (14 -> 3.6 mean,
   // 43 -> 18 max when written); angles stay within 5:1 (3.1).
@@ -219,32 +230,119 @@ TEST(Parameterize, HolesStayHoles) {
   EXPECT_EQ(mesh_topology(q.scan.positions.size(), q.scan.triangles).boundary_loops, 3);
 }
 
-TEST(Parameterize, ClosedSurfaceIsCutAlongASeam) {
+// The atlas of a closed or higher-genus surface: every chart a disk (genus 0, at least one
+// boundary loop) flattened bijectively, the seams gluing copies of the same mesh vertices, the
+// seams and borders closing into the charts' outlines.
+void expect_atlas(const Scan& in, const ParameterizedScan& p, int genus) {
+  expect_bijective(p.scan);
+  EXPECT_TRUE(p.scan.atlas.closed);
+  EXPECT_EQ(p.scan.atlas.genus, genus);
+  EXPECT_EQ(p.report.used.genus, genus);
+  EXPECT_GE(p.report.charts, 1);
+  EXPECT_EQ(p.report.seams, p.scan.atlas.seams.size());
+  EXPECT_TRUE(p.scan.atlas.borders.empty());
+  const MeshTopology t = mesh_topology(p.scan.positions.size(), p.scan.triangles);
+  EXPECT_EQ(t.components, p.report.charts);
+  EXPECT_EQ(t.genus, 0);  // summed over the charts: each is a disk, possibly with holes
+  EXPECT_GE(t.boundary_loops, t.components);
+  // Every seam point is a copy of one mesh vertex on both sides.
+  std::map<std::pair<double, double>, Point3> at;
+  for (size_t i = 0; i < p.scan.uv.size(); ++i) at[{p.scan.uv[i].x(), p.scan.uv[i].y()}] = p.scan.positions[i];
+  size_t points = 0;
+  for (const Seam& seam : p.scan.atlas.seams) {
+    ASSERT_EQ(seam.a.size(), seam.b.size());
+    for (size_t i = 0; i < seam.a.size(); ++i) {
+      const auto a = at.find({seam.a[i].x(), seam.a[i].y()}), b = at.find({seam.b[i].x(), seam.b[i].y()});
+      ASSERT_NE(a, at.end());
+      ASSERT_NE(b, at.end());
+      EXPECT_EQ(a->second, b->second);
+      ++points;
+    }
+  }
+  EXPECT_GT(points, 0u);
+  // The outlines close and hold every chart's area.
+  const auto loops = chart_outlines(p.scan.atlas);
+  double area = 0, uv_area = 0;
+  for (const auto& loop : loops)
+    for (size_t i = 0; i < loop.size(); ++i)
+      area += 0.5 * (loop[i].x() * loop[(i + 1) % loop.size()].y() - loop[(i + 1) % loop.size()].x() * loop[i].y());
+  for (const auto& f : p.scan.triangles) {
+    const Point2 &a = p.scan.uv[f[0]], &b = p.scan.uv[f[1]], &c = p.scan.uv[f[2]];
+    uv_area += 0.5 * ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
+  }
+  EXPECT_NEAR(area, uv_area, 1e-9 * uv_area);
+  // The flattening keeps the surface's area and stretches a chart little.
+  double area3 = 0;
+  for (const auto& f : in.triangles)
+    area3 += 0.5 * (in.positions[f[1]] - in.positions[f[0]]).cross(in.positions[f[2]] - in.positions[f[0]]).norm();
+  EXPECT_NEAR(uv_area, area3, 1e-6 * area3);
+  EXPECT_LE(p.report.stretch, ParameterizeOptions().chart_stretch);
+}
+
+TEST(Parameterize, ClosedSurfaceIsCutIntoCharts) {
   const Scan in = sphere(3);
   const ParameterizedScan p = parameterize_scan(in);
-  expect_bijective(p.scan);
-  EXPECT_GT(p.report.seam_edges, 2u);
-  const MeshTopology t = mesh_topology(p.scan.positions.size(), p.scan.triangles);
-  EXPECT_EQ(t.boundary_loops, 1);  // a disk now
-  EXPECT_EQ(t.genus, 0);
-  // The seam's inner vertices appear twice, at the same position.
-  EXPECT_EQ(p.scan.positions.size(), in.positions.size() + p.report.seam_edges - 1);
+  expect_atlas(in, p, 0);
+  EXPECT_GE(p.report.charts, 2);  // a sphere is no disk
   ParameterizeOptions o;
   o.cut_closed = false;
   EXPECT_THROW(parameterize_scan(in, o), InvalidInput);
 }
 
-TEST(Parameterize, HigherGenusIsRefusedWithItsTopology) {
-  Scan in = torus(16);
+TEST(Parameterize, HandlesAreCutIntoChartsOfGenusZero) {
+  Scan in = torus(24);
   in.source = "ring.off";
+  const ParameterizedScan p = parameterize_scan(in);
+  expect_atlas(in, p, 1);
+  ParameterizeOptions o;
+  o.cut_closed = false;
   try {
-    parameterize_scan(in);
-    FAIL() << "a torus was accepted";
+    parameterize_scan(in, o);
+    FAIL() << "a torus was accepted with cut_closed = false";
   } catch (const InvalidInput& e) {
     const std::string msg = e.what();
-    EXPECT_NE(msg.find("ring.off: component 1 of 1 has 256 vertices, 0 boundary loops, genus 1"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("cut this one open"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("ring.off: component 1 of 1 has 576 vertices, 0 boundary loops, genus 1"), std::string::npos) << msg;
   }
+}
+
+TEST(Parameterize, ASharpEdgeLoopSeparatesCharts) {
+  // A closed cylinder (a can): its two rims are sharp (90 degrees), so the side and the two
+  // caps become charts of their own, glued by sharp seams.
+  Scan can;
+  const int n = 48, rings = 12;
+  for (int j = 0; j <= rings; ++j)
+    for (int i = 0; i < n; ++i)
+      can.positions.emplace_back(std::cos(2 * M_PI * i / n), std::sin(2 * M_PI * i / n), 2.0 * j / rings);
+  auto id = [&](int i, int j) { return j * n + (i % n); };
+  for (int j = 0; j < rings; ++j)
+    for (int i = 0; i < n; ++i) {
+      can.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      can.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  for (int cap = 0; cap < 2; ++cap) {
+    const int centre = static_cast<int>(can.positions.size());
+    can.positions.emplace_back(0, 0, cap == 0 ? 0.0 : 2.0);
+    for (int i = 0; i < n; ++i) {
+      if (cap == 0)
+        can.triangles.push_back({centre, id(i + 1, 0), id(i, 0)});
+      else
+        can.triangles.push_back({centre, id(i, rings), id(i + 1, rings)});
+    }
+  }
+  const ParameterizedScan p = parameterize_scan(can);
+  expect_atlas(can, p, 0);
+  EXPECT_GE(p.report.charts, 3);
+  size_t sharp = 0;
+  for (const Seam& s : p.scan.atlas.seams) sharp += s.sharp;
+  EXPECT_GE(sharp, 2u);  // the two rims
+}
+
+TEST(Parameterize, AnOpenSurfaceThatFlattensWellIsNotCut) {
+  const ParameterizedScan p = parameterize_scan(grid(24, 16, paraboloid));
+  EXPECT_TRUE(p.scan.atlas.empty());
+  EXPECT_EQ(p.report.charts, 1);
+  EXPECT_EQ(p.report.seam_edges, 0u);
+  EXPECT_LE(p.report.stretch, 2);
 }
 
 TEST(Parameterize, ChoosesComponentsByDecreasingSize) {
@@ -450,8 +548,8 @@ TEST(Parameterize, SliverOnlyMeshIsRefused) {
   }
 }
 
-// The meshes of the issue, from Debian's libcgal-demo: every one is flattened bijectively (the
-// closed one cut open along a seam) or refused for its topology.
+// The meshes of the issue, from Debian's libcgal-demo: every one is flattened bijectively, as
+// one chart or cut into charts (the closed one always) that stretch little.
 TEST(Parameterize, CgalDemoMeshes) {
   const auto data = test::cgal_demo_data("tbs_parameterize_test_data", "data/meshes data/points_3/radar.xyz");
   if (!data) GTEST_SKIP() << "libcgal-demo is not installed";
@@ -480,14 +578,26 @@ TEST(Parameterize, CgalDemoMeshes) {
     } else {
       expect_bijective(p.scan);
     }
-    EXPECT_EQ(p.report.seam_edges > 0, c.loops == 0);
+    if (c.loops == 0) {
+      EXPECT_GE(p.report.charts, 2);
+    }
+    EXPECT_EQ(p.scan.atlas.empty(), p.report.charts == 1);
+    EXPECT_LE(p.report.stretch, ParameterizeOptions().chart_stretch);
   }
-  // The radar dish's reconstruction folds under LSCM: the default falls back to mean-value
-  // coordinates and says why; LSCM alone refuses.
+  // The radar dish's reconstruction folds under LSCM: one flattening falls back to mean-value
+  // coordinates and says why; that map stretches more than the chart bound, so the default
+  // cuts the dish into charts instead; LSCM alone refuses.
   const Scan radar = read_scan((dir / "data/points_3/radar.xyz").string());
-  const ParameterizedScan p = parameterize_scan(radar);
+  ParameterizeOptions one;
+  one.chart_stretch = std::numeric_limits<double>::infinity();
+  const ParameterizedScan p = parameterize_scan(radar, one);
   EXPECT_EQ(p.report.method, "mean value (circular boundary)");
   EXPECT_NE(p.report.fallback_reason.find("LSCM folds"), std::string::npos) << p.report.fallback_reason;
+  EXPECT_GT(p.report.stretch, one.chart_stretch == 0 ? 0 : ParameterizeOptions().chart_stretch);
+  const ParameterizedScan cut = parameterize_scan(radar);
+  EXPECT_EQ(cut.report.method, "charts (LSCM)");
+  EXPECT_GT(cut.report.charts, 1);
+  EXPECT_LE(cut.report.stretch, ParameterizeOptions().chart_stretch);
   ParameterizeOptions o;
   o.method = FlattenMethod::Lscm;
   EXPECT_THROW(parameterize_scan(radar, o), InvalidInput);

@@ -193,7 +193,7 @@ if os.path.exists(tarball):
             del junk
             check(np.array_equal(again["uv"], p["uv"]) and np.array_equal(again["source"], p["source"]),
                   "parameterize(%s) twice in one process: the same %d points and (u, v)" % (name, n))
-        spline = tbs.fit(p["points"], p["uv"], normals=p["normals"], faces=p["faces"])
+        spline = tbs.fit(p["points"], p["uv"], normals=p["normals"], faces=p["faces"], atlas=p["atlas"])
         out, rep = os.path.join(WORK, name + ".tbs"), os.path.join(WORK, name + ".json")
         subprocess.run([TBS, "fit", path, "-o", out, "-q", "--report", rep], check=True, stdout=subprocess.DEVNULL)
         cli = json.load(open(rep))
@@ -216,7 +216,7 @@ if os.path.exists(tarball):
           and not g[:p["points"].shape[0] - int(g.sum())].any(),
           "parameterize(patch-20, min_points=5000): %d points, the %d added by the subdivision flagged as guides"
           % (p["points"].shape[0], int(g.sum()) if g is not None else -1))
-    spline = tbs.fit(p["points"], p["uv"], normals=p["normals"], faces=p["faces"], guide=g)
+    spline = tbs.fit(p["points"], p["uv"], normals=p["normals"], faces=p["faces"], guide=g, atlas=p["atlas"])
     out, rep = os.path.join(WORK, "patch-20.tbs"), os.path.join(WORK, "patch-20.json")
     subprocess.run([TBS, "fit", path, "-o", out, "-q", "--report", rep], check=True, stdout=subprocess.DEVNULL)
     cli = json.load(open(rep))
@@ -226,6 +226,31 @@ if os.path.exists(tarball):
     check(np.array_equal(spline.control_points, tbs.load(out).control_points),
           "patch-20: parameterize + fit(guide=...) gives the control points of `tbs fit`, bit for bit (%d)"
           % spline.control_points.shape[0])
+    # patch-20's one flattening stretches more than the chart bound: it is cut into charts, and
+    # the spline keeps their atlas; its outlines close and hold every chart.
+    check(p["atlas"] is not None and p["report"]["charts"] > 1 and spline.report["charts"] == p["report"]["charts"]
+          and len(spline.atlas["seams"]) == len(p["atlas"]["seams"]) > 0,
+          "patch-20: cut into %d charts, %d seams, kept by the spline" % (p["report"]["charts"], p["report"]["seams"]))
+    loops = spline.outlines()
+    area = sum(0.5 * float(np.sum(l[:, 0] * np.roll(l[:, 1], -1) - np.roll(l[:, 0], -1) * l[:, 1])) for l in loops)
+    uvf = p["uv"][p["faces"]]
+    uv_area = float(np.sum(0.5 * ((uvf[:, 1, 0] - uvf[:, 0, 0]) * (uvf[:, 2, 1] - uvf[:, 0, 1])
+                                  - (uvf[:, 1, 1] - uvf[:, 0, 1]) * (uvf[:, 2, 0] - uvf[:, 0, 0]))))
+    # The fit moved the seams onto where the charts' surfaces meet (by a fraction of the
+    # tolerance), so the outlines hold the charts' area up to that.
+    check(abs(area - uv_area) <= 1e-3 * uv_area,
+          "patch-20: the outlines hold the charts' area (%.6g against %.6g)" % (area, uv_area))
+    seams = spline.check_seams(200)
+    check(seams["samples"] == 200 * len(spline.atlas["seams"]) and seams["max_gap"] == seams["max_gap"]
+          and seams["max_gap"] <= spline.report["tolerance_abs"],
+          "patch-20: check_seams samples every seam (gap %.3g)" % seams["max_gap"])
+    saved = os.path.join(WORK, "patch-20-module.tbs")
+    spline.save(saved)
+    back = tbs.load(saved)
+    check(len(back.atlas["seams"]) == len(spline.atlas["seams"])
+          and all(np.array_equal(x["a"], y["a"]) and np.array_equal(x["b"], y["b"]) and x["sharp"] == y["sharp"]
+                  for x, y in zip(back.atlas["seams"], spline.atlas["seams"])),
+          "patch-20: save and load keep the atlas")
     expect_raises(tbs.InvalidInput, "fit with a guide array of the wrong length",
                   lambda: tbs.fit(p["points"], p["uv"], guide=g[:-1]))
     expect_raises(tbs.InvalidInput, "parameterize with an unknown method",
