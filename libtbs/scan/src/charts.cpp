@@ -375,13 +375,7 @@ class Cutter {
       }
       side[i] = b < a;
     }
-    smooth_sides(neighbours(c), side);
-    size_t second = 0;
-    for (size_t i = 0; i < F; ++i) second += side[i] == 1;
-    if (second == 0 || second == F) return false;
-    for (size_t i = 0; i < F; ++i)
-      if (side[i] == 1) label_[static_cast<size_t>(c.faces[i])] = new_label;
-    return true;
+    return apply_split(c, neighbours(c), side, new_label);
   }
 
   // Each face's neighbours across the chart's inner edges, as positions in c.faces (-1 none).
@@ -468,7 +462,15 @@ class Cutter {
             best = (normal[i] - proxy[p]).squaredNorm(), seed[p] = i;
       }
     }
+    return apply_split(c, next, side, new_label);
+  }
+
+  // Gives the faces on side 1 of a split the new label, after straightening the border
+  // between the sides; false (nothing changed) if a side is empty.
+  bool apply_split(const ChartInfo& c, const std::vector<std::array<int, 3>>& next, std::vector<int>& side,
+                   int new_label) {
     smooth_sides(next, side);
+    const size_t F = c.faces.size();
     size_t second = 0;
     for (size_t i = 0; i < F; ++i) second += side[i] == 1;
     if (second == 0 || second == F) return false;
