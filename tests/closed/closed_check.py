@@ -8,7 +8,7 @@ missing) and each input kind (mesh: NAME.stl; cloud: NAME_cloud.xyz), it runs
 
 and asserts:
 
-  fit      exit 0; the report's converged, folds == 0, max_stretch <= 10, closed == true,
+  fit      exit 0; the report's converged, folds == 0 (--max-folds), max_stretch <= 10, closed == true,
            genus == the part's (a missing field is a failure, named)
   (a)      spline -> exact: 2,000 random parameters inside Spline.outlines() (even-odd rule),
            evaluated; the largest distance to the exact B-rep surface <= 1.2e-3 x size
@@ -59,6 +59,7 @@ SMOOTH_SEAM_DEG = 0.5    # (c): normal jump across a smooth seam
 CREASE_TOL_DEG = 3.0     # (c): sharp seam angle against the exact crease angle
 CREASE_RADIUS = 1e-2     # (c): a B-rep edge farther than this x size: no crease there
 MAX_STRETCH = 10.0
+MAX_FOLDS = 0            # the report's folds
 SAMPLES = 2000
 SEAM_SAMPLES = 1000
 CHORDAL = 1e-5           # (b): Spline.tessellate chordal tolerance (relative, as tbs takes it)
@@ -623,8 +624,8 @@ def check_case(args, name, kind, info, fitdir):
 
     if field("converged") is not None and field("converged") is not True:
         reasons.append(f"not converged ({field('stop_reason')})")
-    if field("folds") is not None and field("folds") != 0:
-        reasons.append(f"folds {field('folds')}")
+    if isinstance(field("folds"), int) and field("folds") > MAX_FOLDS:
+        reasons.append(f"folds {field('folds')} > {MAX_FOLDS}")
     if isinstance(field("max_stretch"), (int, float)) and field("max_stretch") > MAX_STRETCH:
         reasons.append(f"max_stretch {field('max_stretch'):.3g} > {MAX_STRETCH:g}")
     if field("closed") is not None and field("closed") is not True:
@@ -686,7 +687,7 @@ def row(case):
 
 
 def main():
-    global DIST_TOL, SEAM_GAP_TOL, SMOOTH_SEAM_DEG, CREASE_TOL_DEG, MAX_STRETCH
+    global DIST_TOL, SEAM_GAP_TOL, SMOOTH_SEAM_DEG, CREASE_TOL_DEG, MAX_STRETCH, MAX_FOLDS
     if len(sys.argv) == 4 and sys.argv[1] == "--geometry":
         geometry_child(sys.argv[2], sys.argv[3])
         return 0
@@ -709,9 +710,10 @@ def main():
     ap.add_argument("--smooth-seam-deg", type=float, default=SMOOTH_SEAM_DEG, help="(c): degrees (0.5)")
     ap.add_argument("--crease-deg", type=float, default=CREASE_TOL_DEG, help="(c): degrees off the exact crease (3)")
     ap.add_argument("--max-stretch", type=float, default=MAX_STRETCH, help="the report's max_stretch (10)")
+    ap.add_argument("--max-folds", type=int, default=MAX_FOLDS, help="the report's folds (0)")
     args = ap.parse_args()
     DIST_TOL, SEAM_GAP_TOL, SMOOTH_SEAM_DEG = args.distance, args.seam_gap, args.smooth_seam_deg
-    CREASE_TOL_DEG, MAX_STRETCH = args.crease_deg, args.max_stretch
+    CREASE_TOL_DEG, MAX_STRETCH, MAX_FOLDS = args.crease_deg, args.max_stretch, args.max_folds
     args.tbs = os.path.abspath(args.tbs)
     args.python_dir = os.path.abspath(args.python_dir)
     args.workdir = os.path.abspath(args.workdir)
@@ -759,7 +761,7 @@ def main():
         "tbs": args.tbs, "python_dir": args.python_dir, "fit_args": args.fit_args,
         "date": time.strftime("%Y-%m-%d %H:%M:%S"),
         "thresholds": {"distance": DIST_TOL, "seam_gap": SEAM_GAP_TOL, "smooth_seam_deg": SMOOTH_SEAM_DEG,
-                       "crease_deg": CREASE_TOL_DEG, "max_stretch": MAX_STRETCH, "samples": args.samples,
+                       "crease_deg": CREASE_TOL_DEG, "max_stretch": MAX_STRETCH, "max_folds": MAX_FOLDS, "samples": args.samples,
                        "seam_samples": args.seam_samples, "chordal": args.chordal},
         "parts": infos,
         "cases": [dict(c, passed=not c["reasons"]) for c in cases],
