@@ -9,7 +9,8 @@ missing) and each input kind (mesh: NAME.stl; cloud: NAME_cloud.xyz), it runs
 and asserts:
 
   fit      exit 0; the report's converged, folds == 0 (--max-folds), max_stretch <= 10, closed == true,
-           genus == the part's (a missing field is a failure, named)
+           genus == the part's (a missing field is a failure, named); `tbs info` on the .tbs
+           exits 0 and reports every knot condition held
   (a)      spline -> exact: 2,000 random parameters inside Spline.outlines() (even-odd rule),
            evaluated; the largest distance to the exact B-rep surface <= 1.2e-3 x size
   (b)      exact -> spline: 2,000 random points on the exact surface (uniform by area); the
@@ -632,6 +633,19 @@ def check_case(args, name, kind, info, fitdir):
         reasons.append(f"report closed {field('closed')}")
     if field("genus") is not None and field("genus") != info["genus"]:
         reasons.append(f"report genus {field('genus')} != {info['genus']}")
+
+    # The written spline as `tbs info` sees it: exit 0, every knot condition holds (a fit must
+    # never write a spline that violates them; issue 48's knob did).
+    try:
+        p = subprocess.run([args.tbs, "info", out_tbs], capture_output=True, text=True, timeout=300)
+        knots = json.loads(p.stdout).get("knot_conditions", {}) if p.stdout.strip() else {}
+        case["info_exit"] = p.returncode
+        if p.returncode != 0:
+            reasons.append(f"tbs info {exit_text(p.returncode)}: {p.stderr.strip()[:200]}")
+        if knots.get("ok") is not True:
+            reasons.append(f"knot conditions violated: {knots.get('issues', [])[:2]}")
+    except Exception as e:
+        reasons.append(f"tbs info: {type(e).__name__}: {e}")
 
     # the geometric checks, in a child process
     job = {"python_dir": args.python_dir, "spline": out_tbs, "brep": os.path.join(args.workdir, name + ".brep"),
