@@ -141,8 +141,6 @@ case("off_count_1e12.off", "OFF\n1000000000000 1 0\n0 0 0\n", 3, what="header cl
 case("off_face_out_of_range.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n", 3, what="face index past the vertices")
 case("off_negative_count.off", "OFF\n-3 1 0\n", 3, what="negative count")
 case("off_nan.off", "OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n", 3, what="NaN coordinate")
-case("off_tetrahedron.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n", 3,
-     what="a closed surface of 4 vertices, too small to cut open")
 # STL
 case("stl_empty.stl", "", 3, what="empty file")
 case("stl_truncated.stl", b"\0" * 80 + struct.pack("<I", 100) + b"\0" * 100, 3,

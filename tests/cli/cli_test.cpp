@@ -375,7 +375,9 @@ TEST(CliFit, MeshWithoutParametersIsFlattenedAndFitted) {
 // A closed mesh so coarse (a cube of 12 triangles) that even its fourth subdivision cannot be
 // fitted within the control-point budget: subdivision stops at 4 levels, so the fit must end
 // there with the best it has, not subdivide "again" (to the same mesh) forever. `timeout`
-// turns a hang into exit code 124.
+// turns a hang into exit code 124. Since its faces became charts (2026-12-07) the cube fits
+// the default tolerance from its 8 vertices; 1e-6 is out of the budget's reach (the seams'
+// ties hold the faces about 2e-4 of the size off their points there).
 TEST(CliFit, CoarseMeshStopsSubdividingAtTheLastLevel) {
   const fs::path dir = temp_dir();
   const fs::path in = dir / "cube.off", out = dir / "cube.tbs", report = dir / "cube.json";
@@ -383,7 +385,7 @@ TEST(CliFit, CoarseMeshStopsSubdividingAtTheLastLevel) {
                        "3 0 2 1\n3 0 3 2\n3 4 5 6\n3 4 6 7\n3 0 1 5\n3 0 5 4\n"
                        "3 1 2 6\n3 1 6 5\n3 2 3 7\n3 2 7 6\n3 3 0 4\n3 3 4 7\n";
   const Result r = run("timeout 300 " + std::string(TBS_EXE) + " fit '" + in.string() + "' -o '" + out.string() +
-                           "' --report '" + report.string() + "'",
+                           "' --tolerance 1e-6 --report '" + report.string() + "'",
                        "", /*with_exe=*/false);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("subdivided         4 x 1-to-4"), std::string::npos) << r.out;

@@ -151,6 +151,38 @@ TEST(AtlasFit, AnEllipsoidFitsAsOneClosedSurfaceOfGenusZero) {
   EXPECT_LE(d, 2 * rep.tolerance);
 }
 
+// A cube of 8 vertices and 12 triangles, as coarse CAD meshes are (libcgal-demo's cube.off):
+// each face, two triangles, is a region between sharp edges and becomes a chart of its own,
+// glued to its four neighbours by sharp seams. Until 2026-12-07 regions under 20 faces were
+// merged whatever their area: 2 charts, 31 folds, not converged.
+TEST(AtlasFit, ACoarseCubesFacesBecomeChartsAndFitFlat) {
+  Scan cube;
+  for (int k = 0; k < 8; ++k) cube.positions.emplace_back(k & 1 ? 1.0 : -1.0, k & 2 ? 1.0 : -1.0, k & 4 ? 1.0 : -1.0);
+  // Two outward triangles per face (corners counter-clockwise seen from outside).
+  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : quads) {
+    cube.triangles.push_back({q[0], q[1], q[2]});
+    cube.triangles.push_back({q[0], q[2], q[3]});
+  }
+  cube.source = "cube";
+  ParameterizeOptions po;
+  po.min_points = 2000;  // as `tbs fit` subdivides a coarse mesh
+  const ParameterizedScan p = parameterize_scan(cube, po);
+  EXPECT_EQ(p.report.charts, 6);
+  EXPECT_EQ(p.scan.atlas.seams.size(), 12u);
+  for (const Seam& seam : p.scan.atlas.seams) EXPECT_TRUE(seam.sharp);
+  const FitResult r = fit(p.scan, FitOptions{});
+  EXPECT_TRUE(r.report.converged) << r.report.stop_reason;
+  EXPECT_EQ(r.report.folds, 0);
+  EXPECT_LE(r.report.max_stretch, 10);
+  EXPECT_TRUE(r.report.closed);
+  EXPECT_EQ(r.report.genus, 0);
+  // Inside the charts the surface lies on the cube: its largest |coordinate| is 1.
+  const double d = distance_inside(
+      r, [](const Point3& q) { return std::abs(q.cwiseAbs().maxCoeff() - 1); }, 2000);
+  EXPECT_LE(d, 2 * r.report.tolerance);
+}
+
 TEST(AtlasFit, SameSplineAndSeamsForAnyThreadCount) {
   const Scan in = torus(3, 1, 40, 16);
   const Fitted one = fit_closed(in, 1), two = fit_closed(in, 2);

@@ -21,11 +21,13 @@ namespace tbs::detail {
 
 namespace {
 
-// Regions of the sharp-edge segmentation smaller than this many faces, or than this share of
-// the surface's area, are noise of the edge test (or of the scan), not faces of the object:
-// they join the neighbour they share the longest border with.
+// Regions of the sharp-edge segmentation smaller than kMinRegionArea of the surface's area, or
+// of fewer than kMinRegionFaces faces and smaller than kSmallRegionArea, are noise of the edge
+// test (or of the scan), not faces of the object: they join the neighbour they share the
+// longest border with. A coarse CAD mesh's faces (a cube's two triangles a side) stay.
 constexpr size_t kMinRegionFaces = 20;
 constexpr double kMinRegionArea = 1e-3;
+constexpr double kSmallRegionArea = 1e-2;
 // A chart of fewer faces is flattened as it is and not cut further.
 constexpr size_t kMinChartFaces = 12;
 // Bounds on the work: charts and cutting rounds.
@@ -159,7 +161,8 @@ class Cutter {
       }
       std::vector<std::pair<size_t, int>> small;
       for (const auto& [l, s] : size)
-        if (s.first < kMinRegionFaces || s.second < kMinRegionArea * total_area)
+        if (s.second < kMinRegionArea * total_area ||
+            (s.first < kMinRegionFaces && s.second < kSmallRegionArea * total_area))
           small.push_back({s.first, l});
       if (small.empty() || size.size() == 1) break;
       std::sort(small.begin(), small.end());
