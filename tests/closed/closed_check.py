@@ -122,6 +122,20 @@ def sample_in_triangles(uv, faces, n, rng):
     return (1 - s) * A[pick] + s * (1 - r) * B[pick] + s * r * C[pick]
 
 
+def plane_coordinates(AB, AC, AP):
+    """(v, w, ok): AP's least-squares coordinates along the triangles' edges AB and AC (rows);
+    ok is False for degenerate triangles, whose v and w are meaningless."""
+    d00 = np.einsum("ij,ij->i", AB, AB)
+    d01 = np.einsum("ij,ij->i", AB, AC)
+    d11 = np.einsum("ij,ij->i", AC, AC)
+    d20 = np.einsum("ij,ij->i", AP, AB)
+    d21 = np.einsum("ij,ij->i", AP, AC)
+    den = d00 * d11 - d01 * d01
+    ok = den > 1e-30 * np.maximum(d00 * d11, 1e-300)
+    den = np.where(ok, den, 1.0)
+    return (d11 * d20 - d01 * d21) / den, (d00 * d21 - d01 * d20) / den, ok
+
+
 def point_triangle_closest(P, A, B, C):
     """Exact distances between points P[i] and triangles (A[i], B[i], C[i]) (all (m, 3)), and
     the closest points of the triangles."""
@@ -140,16 +154,7 @@ def point_triangle_closest(P, A, B, C):
         d = np.where(closer, d2, d)
         X = np.where(closer[:, None], X2, X)
     AB, AC, AP = B - A, C - A, P - A
-    d00 = np.einsum("ij,ij->i", AB, AB)
-    d01 = np.einsum("ij,ij->i", AB, AC)
-    d11 = np.einsum("ij,ij->i", AC, AC)
-    d20 = np.einsum("ij,ij->i", AP, AB)
-    d21 = np.einsum("ij,ij->i", AP, AC)
-    den = d00 * d11 - d01 * d01
-    ok = den > 1e-30 * np.maximum(d00 * d11, 1e-300)
-    den = np.where(ok, den, 1.0)
-    v = (d11 * d20 - d01 * d21) / den
-    w = (d00 * d21 - d01 * d20) / den
+    v, w, ok = plane_coordinates(AB, AC, AP)
     N = np.cross(AB, AC)
     nn = np.einsum("ij,ij->i", N, N)
     h = np.einsum("ij,ij->i", AP, N) / np.where(nn > 0, nn, 1.0)
@@ -167,17 +172,8 @@ def point_triangle_distance(P, A, B, C):
 def barycentric(X, A, B, C):
     """Barycentric coordinates (m, 3) of points X in triangles (A, B, C), clamped to the
     triangle (degenerate triangles: the nearest corner's weights)."""
-    AB, AC, AX = B - A, C - A, X - A
-    d00 = np.einsum("ij,ij->i", AB, AB)
-    d01 = np.einsum("ij,ij->i", AB, AC)
-    d11 = np.einsum("ij,ij->i", AC, AC)
-    d20 = np.einsum("ij,ij->i", AX, AB)
-    d21 = np.einsum("ij,ij->i", AX, AC)
-    den = d00 * d11 - d01 * d01
-    ok = den > 1e-30 * np.maximum(d00 * d11, 1e-300)
-    den = np.where(ok, den, 1.0)
-    v = np.where(ok, (d11 * d20 - d01 * d21) / den, 0.0)
-    w = np.where(ok, (d00 * d21 - d01 * d20) / den, 0.0)
+    v, w, ok = plane_coordinates(B - A, C - A, X - A)
+    v, w = np.where(ok, v, 0.0), np.where(ok, w, 0.0)
     lam = np.clip(np.stack([1 - v - w, v, w], axis=1), 0.0, 1.0)
     return lam / lam.sum(axis=1)[:, None]
 
