@@ -43,6 +43,8 @@ void print_summary(const ConvertOptions& o, const ConvertReport& r) {
     std::printf("%-18s %zu B-spline faces, %zu shell%s, %zu edges, %zu free edges in %zu loop%s\n", "shape",
                 r.cad.faces, r.cad.shells, r.cad.shells == 1 ? "" : "s", r.cad.edges, r.cad.free_edges,
                 r.cad.free_loops, r.cad.free_loops == 1 ? "" : "s");
+    if (r.cad.solid)
+      std::printf("%-18s a closed solid, volume %.6g %s^3\n", "solid", r.cad.volume, u);
     std::printf("%-18s %.3g %s (%s)\n", "CAD tolerance", r.tolerance, u, r.tolerance_source.c_str());
     if (r.deviations_measured) {
       // Each line marks the tolerance it misses.

@@ -1,12 +1,15 @@
 // Region faces (cad_regions.h): smooth regions of the domain, one trimmed B-spline surface each.
 
+#include <tbs/atlas.h>
 #include <tbs/cad_regions.h>
 #include <tbs/errors.h>
 #include <tbs/evaluator.h>
 #include <tbs/predicates.h>
 
 #include "bspline_basis.h"
+#include "atlas_trims.h"
 #include "side_eval.h"
+#include "trim_curve.h"
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCholesky>
@@ -26,6 +29,7 @@
 #include <map>
 #include <mutex>
 #include <numeric>
+#include <optional>
 #include <queue>
 
 namespace tbs {
@@ -36,6 +40,7 @@ const char* to_string(RegionEdgeKind kind) {
     case RegionEdgeKind::Crease: return "crease";
     case RegionEdgeKind::CreaseExtension: return "crease extension";
     case RegionEdgeKind::Split: return "split";
+    case RegionEdgeKind::Seam: return "seam";
   }
   return "?";
 }
@@ -43,6 +48,10 @@ const char* to_string(RegionEdgeKind kind) {
 namespace {
 
 using detail::Basis;
+using detail::breaks_and_midpoints;
+using detail::inner_points;
+using detail::span_of;
+using detail::uniform_breaks;
 using detail::basis_functions;
 using detail::find_span;
 
@@ -93,7 +102,8 @@ bool regular(const SurfacePoint& p) {
 // The domain with the borders of the regions and the region label of every triangle.
 class Regions {
  public:
-  explicit Regions(const Domain& d) : d_(d), kind_(static_cast<size_t>(d.edge_count())),
+  // With `creases` false, feature edges do not bound regions (an atlas: one region per chart).
+  explicit Regions(const Domain& d, bool creases = true) : d_(d), kind_(static_cast<size_t>(d.edge_count())),
                                       border_(static_cast<size_t>(d.edge_count()), 0),
                                       vertex_edges_(static_cast<size_t>(d.vertex_count())) {
     for (int e = 0; e < d.edge_count(); ++e) {
@@ -101,7 +111,7 @@ class Regions {
       if (d.is_boundary_edge(e)) {
         border_[static_cast<size_t>(e)] = 1;
         kind_[static_cast<size_t>(e)] = RegionEdgeKind::Boundary;
-      } else if (d.is_feature_edge(e)) {
+      } else if (creases && d.is_feature_edge(e)) {
         border_[static_cast<size_t>(e)] = 1;
         kind_[static_cast<size_t>(e)] = RegionEdgeKind::Crease;
       }
@@ -852,11 +862,15 @@ class TensorSystem {
 // What a fit needs of its region, copied while no other fit changes the regions: its
 // triangles, its border half-edges and which triangles of the domain it holds.
 struct RegionView {
+  int region;
   std::vector<int> triangles;
   std::vector<Regions::HalfEdge> border;
   std::vector<char> inside;
-  RegionView(const Regions& regions, int r)
-      : triangles(regions.triangles(r)), border(regions.border_half_edges(r)),
+  // Over an atlas the border of a region is the domain's boundary, beyond the chart's
+  // outline: not sampled (the outline is).
+  RegionView(const Regions& regions, int r, bool atlas)
+      : region(r), triangles(regions.triangles(r)),
+        border(atlas ? std::vector<Regions::HalfEdge>{} : regions.border_half_edges(r)),
         inside(static_cast<size_t>(regions.domain().triangle_count()), 0) {
     for (int t : triangles) inside[static_cast<size_t>(t)] = 1;
   }
@@ -877,6 +891,11 @@ struct Context {
   // it there; normals are not compared in them. (Normals are compared only along the borders
   // where two faces meet: that is where the angle tolerance keeps them together.)
   std::vector<char> near_tip;
+  // Over an atlas: the charts' outlines. Only the part of a chart's domain inside them is
+  // the surface: the faces are fitted and checked there, and along the outlines (the trims).
+  const OutlineIndex* outline = nullptr;
+  std::vector<std::vector<std::array<Point2, 2>>> outline_segments;  // per region
+  bool keeps(const Point2& u) const { return !outline || outline->inside(u); }
 };
 
 std::array<Point2, 3> corners(const Domain& d, int t) {
@@ -912,20 +931,6 @@ struct FitResult {
   bool slow_spot = false;
 };
 
-std::vector<double> uniform_breaks(double a, double b, int spans) {
-  std::vector<double> br(static_cast<size_t>(spans) + 1);
-  for (int i = 0; i <= spans; ++i) br[static_cast<size_t>(i)] = a + (b - a) * i / spans;
-  br.back() = b;
-  return br;
-}
-
-// The spans (indices into breaks) that hold u, both of them when u is a break point.
-int span_of(const std::vector<double>& breaks, double u) {
-  const auto it = std::upper_bound(breaks.begin(), breaks.end(), u);
-  const int i = static_cast<int>(it - breaks.begin()) - 1;
-  return std::clamp(i, 0, static_cast<int>(breaks.size()) - 2);
-}
-
 // Samples along the border of a region, evaluated on the region's side, about `spacing`
 // apart (in (u, v)); `offset` 0.5 gives the points halfway between those of offset 0.
 void border_samples(const Context& c, const std::vector<Regions::HalfEdge>& border, double spacing,
@@ -942,6 +947,19 @@ void border_samples(const Context& c, const std::vector<Regions::HalfEdge>& bord
       const bool shared = !d.is_boundary_edge(d.find_edge(h.from, h.to));
       out.push_back(make_sample(u, detail::evaluate_in_triangle(c.ev, tri, u),
                                 shared && !c.near_tip[static_cast<size_t>(h.triangle)]));
+    }
+  }
+}
+
+// Over an atlas: samples along the outline of region r's chart, about `spacing` apart (in
+// (u, v)); `offset` 0.5 gives the points halfway between those of offset 0.
+void outline_samples(const Context& c, int r, double spacing, double offset, std::vector<Sample>& out) {
+  if (!c.outline) return;
+  for (const auto& [a, b] : c.outline_segments[static_cast<size_t>(r)]) {
+    const int count = static_cast<int>(std::clamp(std::ceil((b - a).norm() / spacing), 1.0, 4096.0));
+    for (int k = 0; k < count; ++k) {
+      const Point2 u = a + (k + offset) / count * (b - a);
+      out.push_back(make_sample(u, c.ev.evaluate(u), false));
     }
   }
 }
@@ -969,7 +987,7 @@ class GridSamples {
           continue;
         }
         const Point2 q(us[i], vs[j]);
-        a = rv.holds(c.ev.locate(q)) ? -2 : -1;
+        a = rv.holds(c.ev.locate(q)) && c.keeps(q) ? -2 : -1;
         if (a == -2) pts.push_back(q);
       }
     std::vector<Point3> pos(pts.size());
@@ -1017,25 +1035,6 @@ class GridSamples {
   std::vector<Sample> samples_;
 };
 
-// Every break and the midpoint of every span.
-std::vector<double> breaks_and_midpoints(const std::vector<double>& br) {
-  std::vector<double> out;
-  for (size_t i = 0; i + 1 < br.size(); ++i) {
-    out.push_back(br[i]);
-    out.push_back(0.5 * (br[i] + br[i + 1]));
-  }
-  out.push_back(br.back());
-  return out;
-}
-
-// (p + 1) points inside every span, at (k + 1/2) / (p + 1).
-std::vector<double> inner_points(const std::vector<double>& br, int p) {
-  std::vector<double> out;
-  for (size_t i = 0; i + 1 < br.size(); ++i)
-    for (int k = 0; k <= p; ++k) out.push_back(br[i] + (br[i + 1] - br[i]) * (k + 0.5) / (p + 1));
-  return out;
-}
-
 // Stops refining a region whose last two rounds project a need of more than this many times
 // the pole budget (the error falling as a power of the pole count).
 constexpr double kProjectedOver = 4.0;
@@ -1065,8 +1064,8 @@ FitResult fit_region(const Context& c, const RegionView& rv, bool early) {
   // The fixed part of the check: the lattice of every triangle of the region.
   std::vector<Sample> lattice;
   for (int t : tris)
-    lattice.insert(lattice.end(), c.lattice.begin() + static_cast<long>(c.lattice_start[static_cast<size_t>(t)]),
-                   c.lattice.begin() + static_cast<long>(c.lattice_start[static_cast<size_t>(t) + 1]));
+    for (size_t k = c.lattice_start[static_cast<size_t>(t)]; k < c.lattice_start[static_cast<size_t>(t) + 1]; ++k)
+      if (c.keeps(c.lattice[k].uv)) lattice.push_back(c.lattice[k]);
 
   auto spans_for = [&](double extent) { return std::max(1, static_cast<int>(std::ceil(extent / h))); };
   std::vector<double> bu = uniform_breaks(lo.x(), hi.x(), spans_for(hi.x() - lo.x()));
@@ -1119,6 +1118,7 @@ FitResult fit_region(const Context& c, const RegionView& rv, bool early) {
     std::vector<Sample> fit;
     fit_grid.update(c, rv, inner_points(bu, std::min(p, 2)), inner_points(bv, std::min(p, 2)), fit);
     border_samples(c, border, min_span / (p + 1), 0.0, fit);
+    outline_samples(c, rv.region, min_span / (p + 1), 0.0, fit);
     // Thin plate per cell: relative to the data a cell holds, 3 x 3 samples.
     const double per_cell = 9;
     std::vector<double> lambda;
@@ -1163,6 +1163,7 @@ FitResult fit_region(const Context& c, const RegionView& rv, bool early) {
     std::vector<Sample> check;
     check_grid.update(c, rv, breaks_and_midpoints(bu), breaks_and_midpoints(bv), check);
     border_samples(c, border, min_span / (p + 1), 0.5, check);
+    outline_samples(c, rv.region, min_span / (p + 1), 0.5, check);
     check.insert(check.end(), lattice.begin(), lattice.end());
     double pos_dev = 0, normal_dev = 0;
     std::vector<char> mark_u(bu.size() - 1, 0), mark_v(bv.size() - 1, 0);
@@ -1260,8 +1261,8 @@ int nearest_triangle(const Domain& d, const std::vector<int>& tris, const Point2
   return best;
 }
 
-// Fits the 3D curve of a trim edge: a clamped B-spline through F at both ends, least squares
-// to F along the straight (u, v) segment, refined until within a quarter of the tolerance.
+// The 3D curve of a straight trim edge: fitted to F along the (u, v) segment of its chain,
+// within a quarter of the tolerance.
 struct TrimCurve {
   BSplineCurve3 curve;
   double length = 0;
@@ -1285,75 +1286,8 @@ TrimCurve fit_trim_curve(const Context& c, const std::vector<int>& chain, int de
     const Point2 u = a + t * dir;
     return detail::evaluate_in_triangle(c.ev, corners(d, tri), u).position;
   };
-  const Point3 fa = spline_at(0), fb = spline_at(out.length);
-  const int p = degree;
-  std::vector<double> br = uniform_breaks(0, out.length, static_cast<int>(chain.size()) - 1);
-  for (int round = 0; round < kMaxRounds; ++round) {
-    const std::vector<double> k = detail::clamped_knots(p, br);
-    const int n = static_cast<int>(k.size()) - p - 1;
-    // Unknowns: poles 1 .. n-2; the ends are F at the vertices.
-    const int m = n - 2;
-    std::vector<Point3> poles(static_cast<size_t>(n));
-    poles.front() = fa;
-    poles.back() = fb;
-    if (m > 0) {
-      std::vector<Eigen::Triplet<double>> entries;
-      Eigen::MatrixX3d rhs = Eigen::MatrixX3d::Zero(m, 3);
-      const std::vector<double> ts = inner_points(br, p + 1);
-      for (double t : ts) {
-        const int s = find_span(k, p, t);
-        Basis bs;
-        basis_functions(k, p, s, t, 0, bs);
-        Point3 f = spline_at(t);
-        for (int j = 0; j <= p; ++j) {
-          const int idx = s - p + j;
-          if (idx == 0) f -= bs.value[j] * fa;
-          if (idx == n - 1) f -= bs.value[j] * fb;
-        }
-        for (int j = 0; j <= p; ++j) {
-          const int row = s - p + j - 1;
-          if (row < 0 || row >= m) continue;
-          rhs.row(row) += bs.value[j] * f.transpose();
-          for (int l = 0; l <= p; ++l) {
-            const int col = s - p + l - 1;
-            if (col < 0 || col >= m) continue;
-            entries.emplace_back(row, col, bs.value[j] * bs.value[l]);
-          }
-        }
-      }
-      Eigen::SparseMatrix<double> mat(m, m);
-      mat.setFromTriplets(entries.begin(), entries.end());
-      Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(mat);
-      const Eigen::MatrixX3d x = ldlt.solve(rhs);
-      if (ldlt.info() != Eigen::Success || !x.allFinite())
-        throw SolverError("region faces: the least-squares system of a trim curve could not be solved");
-      for (int i = 0; i < m; ++i) poles[static_cast<size_t>(i) + 1] = x.row(i).transpose();
-    }
-    out.curve = {p, k, poles};
-    // Check between the fit samples (2p + 2 points per span), at the breaks and at the
-    // chain's vertices.
-    std::vector<double> check = breaks_and_midpoints(br);
-    const std::vector<double> between = inner_points(br, 2 * p + 1);
-    check.insert(check.end(), between.begin(), between.end());
-    check.insert(check.end(), at.begin(), at.end());
-    std::vector<char> mark(br.size() - 1, 0);
-    bool failed = false;
-    for (double t : check) {
-      t = std::clamp(t, 0.0, out.length);
-      if ((out.curve.value(t) - spline_at(t)).norm() > kCurveMargin * c.tol) {
-        failed = true;
-        mark[static_cast<size_t>(span_of(br, t))] = 1;
-      }
-    }
-    if (!failed) break;
-    std::vector<double> next;
-    for (size_t i = 0; i + 1 < br.size(); ++i) {
-      next.push_back(br[i]);
-      if (mark[i]) next.push_back(0.5 * (br[i] + br[i + 1]));
-    }
-    next.push_back(br.back());
-    br = std::move(next);
-  }
+  out.curve = detail::fit_trim_curve(spline_at, out.length, static_cast<int>(chain.size()) - 1, at, degree,
+                                     kCurveMargin * c.tol, kMaxRounds);
   return out;
 }
 
@@ -1372,6 +1306,10 @@ double trim_gap(const TrimCurve& tc, const BSplineSurface3& s, const Point2& a, 
 }  // namespace
 
 CadRegions make_cad_regions(const Spline& spline, const CadRegionOptions& o) {
+  return make_cad_regions(spline, Atlas{}, o);
+}
+
+CadRegions make_cad_regions(const Spline& spline, const Atlas& atlas_in, const CadRegionOptions& o) {
   const Domain& d = spline.domain();
   if (d.triangle_count() == 0) throw InvalidInput("region faces: the spline has no triangles");
   if (!(o.tolerance > 0) && !(o.tolerance_abs > 0))
@@ -1386,8 +1324,12 @@ CadRegions make_cad_regions(const Spline& spline, const CadRegionOptions& o) {
   tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
   return arena.execute([&] {
     const Evaluator ev(spline);
-    Regions regions(d);
+    const bool atlas = !atlas_in.empty();
+    if (atlas) check_atlas_structure(atlas_in, "region faces");
+    Regions regions(d, !atlas);
     CadRegions out;
+    out.atlas = atlas;
+    out.closed = atlas && atlas_in.closed;
     out.tolerance = o.tolerance_abs > 0 ? o.tolerance_abs : o.tolerance * detail::model_size(spline);
     out.angle_tolerance = o.angle_tolerance;
     const auto [extended, left] = regions.extend_creases();
@@ -1398,6 +1340,19 @@ CadRegions make_cad_regions(const Spline& spline, const CadRegionOptions& o) {
 
     Context c{spline, ev, o, out.tolerance, o.angle_tolerance / 2, {}, {}, {}};
     c.near_tip.assign(static_cast<size_t>(d.triangle_count()), 0);
+    std::optional<OutlineIndex> outline;
+    if (atlas) {
+      const std::vector<std::vector<Point2>> loops = chart_outlines(atlas_in);
+      outline.emplace(loops);
+      c.outline = &*outline;
+      c.outline_segments.resize(static_cast<size_t>(regions.region_count()));
+      for (const auto& loop : loops) {
+        const int t = ev.locate(0.5 * (loop[0] + loop[1]));
+        if (t < 0) throw Error("region faces: a chart's outline passes outside the domain");
+        auto& segs = c.outline_segments[static_cast<size_t>(regions.label(t))];
+        for (size_t i = 0; i < loop.size(); ++i) segs.push_back({loop[i], loop[(i + 1) % loop.size()]});
+      }
+    }
     for (int v : regions.crease_tips())
       for (int t : d.vertex_triangles(v)) c.near_tip[static_cast<size_t>(t)] = 1;
     // The check lattice of every triangle, evaluated inside that triangle.
@@ -1440,11 +1395,23 @@ CadRegions make_cad_regions(const Spline& spline, const CadRegionOptions& o) {
       const RegionView view = [&] {
         std::lock_guard guard(lock);
         early = !to_budget[rr];
-        return RegionView(regions, r);
+        return RegionView(regions, r, atlas);
       }();
       FitResult f = fit_region(c, view, early);
       std::lock_guard guard(lock);
-      if (f.over_budget) {
+      if (f.over_budget && atlas) {
+        // A chart's face is trimmed by its outline, which no split or island follows: it
+        // takes the whole budget.
+        const bool again = !to_budget[rr];
+        if (again) {
+          to_budget[rr] = 1;
+          feeder.add(r);
+          ++to_fit;
+        } else {
+          ++out.unsplittable;
+          ++done;
+        }
+      } else if (f.over_budget) {
         const int before = regions.region_count();
         bool again = true;
         if (f.slow_spot && regions.carve(r, nearest_triangle(d, regions.triangles(r), f.worst)))
@@ -1499,6 +1466,16 @@ CadRegions make_cad_regions(const Spline& spline, const CadRegionOptions& o) {
       out.poles += f.surface.poles.size();
       out.max_position_deviation = std::max(out.max_position_deviation, fr.position_dev);
       out.max_normal_deviation = std::max(out.max_normal_deviation, fr.normal_dev);
+    }
+
+    if (atlas) {
+      const Charts charts = domain_charts(d);
+      std::vector<int> face_of_chart(static_cast<size_t>(charts.count), -1);
+      for (int r = 0; r < regions.region_count(); ++r)
+        face_of_chart[static_cast<size_t>(charts.of_triangle[static_cast<size_t>(regions.triangles(r).front())])] = r;
+      detail::atlas_trims(spline, atlas_in, ev, face_of_chart, kCurveMargin * c.tol, o.degree, kMaxRounds, out);
+      out.within_tolerance = within && out.unsplittable == 0;
+      return out;
     }
 
     // Topological vertices: where the region borders meet, turn, or change their kind or

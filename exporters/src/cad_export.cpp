@@ -14,7 +14,13 @@
 #include <StepData_StepWriter.hxx>
 #include <XSControl_TransferWriter.hxx>
 #include <XSControl_WorkSession.hxx>
+#include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
+#include <BRepGProp.hxx>
+#include <BRepLib.hxx>
+#include <GProp_GProps.hxx>
+#include <TopoDS_Shell.hxx>
+#include <TopoDS_Solid.hxx>
 #include <BRepCheck_Analyzer.hxx>
 #include <Geom_BSplineSurface.hxx>
 #include <IGESControl_Controller.hxx>
@@ -149,6 +155,19 @@ CadExportReport export_shape(const char* format, const std::string& path, const 
   try {
     CadExportReport r;
     detail::ShellResult shell = build();
+    // A shell with no free edge bounds a volume: it becomes a solid, its faces turned to face
+    // outward.
+    if (shell.shell.ShapeType() == TopAbs_SHELL && BRep_Tool::IsClosed(shell.shell)) {
+      TopoDS_Shell closed = TopoDS::Shell(shell.shell);
+      closed.Closed(Standard_True);
+      TopoDS_Solid solid;
+      BRep_Builder builder;
+      builder.MakeSolid(solid);
+      builder.Add(solid, closed);
+      BRepLib::OrientClosedSolid(solid);
+      shell.shell = solid;
+      r.solid = true;
+    }
     r.faces = shell.faces;
     r.max_edge_tolerance = shell.max_edge_tolerance;
     r.build_seconds = seconds_since(t0);
@@ -163,6 +182,14 @@ CadExportReport export_shape(const char* format, const std::string& path, const 
     }
     r.check_seconds = seconds_since(t1);
     count_shape(shell.shell, r);
+    if (r.solid) {
+      // Adaptive integration: the fixed Gauss rule, span by span of the trims, was 1.4 % off
+      // on the egg's two faces of 130 x 130 poles (the adaptive one: 4e-4, as FreeCAD reads it).
+      const auto tv = std::chrono::steady_clock::now();
+      GProp_GProps props;
+      BRepGProp::VolumeProperties(shell.shell, props, 1e-4);
+      r.volume = props.Mass();
+    }
     // The coordinates are already in `unit`: OCCT's session unit is set to the same, so it
     // writes them unscaled.
     Interface_Static::SetCVal("xstep.cascade.unit", unit);

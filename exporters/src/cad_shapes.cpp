@@ -159,6 +159,50 @@ Handle(Geom2d_Curve) trim_line(const Point2& a, const Point2& b, double length, 
   return new Geom2d_BSplineCurve(poles, knots, mults, 1);
 }
 
+// A trim of an atlas: the polyline `line` with curve parameter at[i] at line[i], as a degree-1
+// B-spline, with a knot also wherever a segment crosses a knot line of the face's surface
+// (as trim_line()).
+Handle(Geom2d_Curve) trim_polyline(const std::vector<Point2>& line, const std::vector<double>& at,
+                                   const BSplineSurface3& s) {
+  std::vector<double> ts;
+  std::vector<Point2> ps;
+  for (size_t i = 0; i + 1 < line.size(); ++i) {
+    const Point2 &a = line[i], &b = line[i + 1];
+    const double t0 = at[i], t1 = at[i + 1], span = t1 - t0;
+    std::vector<double> cut;
+    for (int axis = 0; axis < 2; ++axis) {
+      const double d = b[axis] - a[axis];
+      if (std::fabs(d) < 1e-300) continue;
+      for (double k : axis == 0 ? s.knots_u : s.knots_v) {
+        const double f = (k - a[axis]) / d;
+        if (f > kSame && f < 1 - kSame) cut.push_back(f);
+      }
+    }
+    std::sort(cut.begin(), cut.end());
+    ts.push_back(t0);
+    ps.push_back(a);
+    double last = 0;
+    for (double f : cut) {
+      if (f - last <= kSame) continue;
+      ts.push_back(t0 + f * span);
+      ps.push_back(a + f * (b - a));
+      last = f;
+    }
+  }
+  ts.push_back(at.back());
+  ps.push_back(line.back());
+  const int n = static_cast<int>(ts.size());
+  TColgp_Array1OfPnt2d poles(1, n);
+  TColStd_Array1OfReal knots(1, n);
+  TColStd_Array1OfInteger mults(1, n);
+  for (int i = 0; i < n; ++i) {
+    poles.SetValue(i + 1, gp_Pnt2d(ps[static_cast<size_t>(i)].x(), ps[static_cast<size_t>(i)].y()));
+    knots.SetValue(i + 1, ts[static_cast<size_t>(i)]);
+    mults.SetValue(i + 1, i == 0 || i + 1 == n ? 2 : 1);
+  }
+  return new Geom2d_BSplineCurve(poles, knots, mults, 1);
+}
+
 }  // namespace
 
 ShellResult region_shell(const CadRegions& r) {
@@ -175,6 +219,13 @@ ShellResult region_shell(const CadRegions& r) {
       std::vector<ShellBuilder::Use> w;
       for (const RegionEdgeUse& u : loop) {
         const RegionEdge& e = r.edges[static_cast<size_t>(u.edge)];
+        if (!e.at.empty()) {
+          // Over an atlas: the face on the edge's left runs it forward along trims[0], the one
+          // on its right backward along trims[1].
+          const auto& line = e.trims[u.reversed ? 1 : 0];
+          w.push_back({edge[static_cast<size_t>(u.edge)], u.reversed, trim_polyline(line, e.at, f.surface)});
+          continue;
+        }
         const Point2& a = r.vertex_parameters[static_cast<size_t>(e.vertices[0])];
         const Point2& c = r.vertex_parameters[static_cast<size_t>(e.vertices[1])];
         w.push_back({edge[static_cast<size_t>(u.edge)], u.reversed, trim_line(a, c, e.length, f.surface)});

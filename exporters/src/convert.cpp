@@ -225,7 +225,7 @@ void convert_cad(const SplineFile& file, const std::string& output, const Conver
     co.max_poles = o.max_poles;
     co.threads = o.threads;
     co.progress = o.progress;
-    const CadRegions c = make_cad_regions(s, co);
+    const CadRegions c = make_cad_regions(s, file.atlas, co);
     r.stage_seconds.emplace_back("regions", since(t0));
     r.regions = c.faces.size();
     r.smooth_regions = static_cast<size_t>(c.smooth_regions);
@@ -401,6 +401,8 @@ std::string to_json(const ConvertReport& r) {
     j["edges"] = r.cad.edges;
     j["free_edges"] = r.cad.free_edges;
     j["free_loops"] = r.cad.free_loops;
+    j["solid"] = r.cad.solid;
+    if (r.cad.solid) j["volume"] = r.cad.volume;
     j["max_edge_tolerance"] = r.cad.max_edge_tolerance;
     if (r.faces_form == "regions") {
       j["regions"] = {{"faces", r.regions},

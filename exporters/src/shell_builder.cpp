@@ -93,13 +93,27 @@ void ShellBuilder::add_face(const Handle(Geom_Surface)& s, const std::vector<std
   TopoDS_Face f;
   b.MakeFace(f, s, Precision::Confusion());
   b.NaturalRestriction(f, Standard_False);
+  // An edge that bounds the face on both sides (a seam of a chart with itself) gets both its
+  // curves on the surface at once: the first for the edge run forward, the second backward.
+  std::map<int, std::vector<const Use*>> uses_of;
+  for (const auto& uses : wires)
+    for (const Use& u : uses) uses_of[u.edge].push_back(&u);
+  for (const auto& [id, uses] : uses_of) {
+    Edge& e = edges_[static_cast<size_t>(id)];
+    if (uses.size() == 2 && uses[0]->reversed != uses[1]->reversed) {
+      const Use* forward = uses[0]->reversed ? uses[1] : uses[0];
+      const Use* backward = uses[0]->reversed ? uses[0] : uses[1];
+      b.UpdateEdge(e.edge, forward->pcurve, backward->pcurve, f, Precision::Confusion());
+    } else {
+      b.UpdateEdge(e.edge, uses[0]->pcurve, f, Precision::Confusion());
+    }
+    for (const Use* u : uses) measure(e, u->pcurve, s);
+  }
   for (const auto& uses : wires) {
     TopoDS_Wire w;
     b.MakeWire(w);
     for (const Use& u : uses) {
       Edge& e = edges_[static_cast<size_t>(u.edge)];
-      b.UpdateEdge(e.edge, u.pcurve, f, Precision::Confusion());
-      measure(e, u.pcurve, s);
       b.Add(w, u.reversed ? e.edge.Reversed() : e.edge);
     }
     w.Closed(Standard_True);

@@ -488,6 +488,22 @@ TEST(CliFit, ATorusIsFittedOverAnAtlasAndInfoReportsIt) {
   EXPECT_EQ(meta["fit"]["genus"], 1);
   EXPECT_EQ(meta["fit"]["closed"], true);
   EXPECT_EQ(meta["parameterization"]["charts"], j["atlas"]["charts"]);
+
+  // Its STEP is one closed solid: a face per chart, the seams shared edges, no free edge, and
+  // the volume of the torus (2 pi^2 R r^2 = 39.48; the mesh's vertices lie on it, its flat
+  // triangles cut a little inside).
+  const Result step = run("convert '" + out.string() + "' '" + (dir / "torus.step").string() + "' --units mm --report '" +
+                          (dir / "torus-step.json").string() + "' --quiet");
+  ASSERT_EQ(step.code, 0) << step.err;
+  EXPECT_NE(step.out.find("a closed solid, volume"), std::string::npos) << step.out;
+  const json cad = json::parse(read_file((dir / "torus-step.json").string()));
+  EXPECT_EQ(cad["solid"], true);
+  EXPECT_EQ(cad["shells"], 1);
+  EXPECT_EQ(cad["free_edges"], 0);
+  EXPECT_EQ(cad["faces"], j["atlas"]["charts"]);
+  const double volume = cad["volume"].get<double>(), exact = 2 * M_PI * M_PI * 2;
+  EXPECT_GT(volume, 0.97 * exact) << volume;
+  EXPECT_LT(volume, 1.001 * exact) << volume;
 }
 
 TEST(CliFit, BadOptionsAndFiles) {

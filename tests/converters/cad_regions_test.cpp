@@ -360,7 +360,7 @@ TEST(CadRegions, OptionsOutOfRangeAreRefused) {
   EXPECT_THROW(make_cad_regions(s, {.degree = 1}), InvalidInput);
   EXPECT_THROW(make_cad_regions(s, {.degree = 10}), InvalidInput);
   EXPECT_THROW(make_cad_regions(s, {.max_poles = 15}), InvalidInput);
-  EXPECT_THROW(make_cad_regions(Spline(), {}), InvalidInput);
+  EXPECT_THROW(make_cad_regions(Spline(), CadRegionOptions{}), InvalidInput);
 }
 
 }  // namespace

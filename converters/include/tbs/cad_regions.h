@@ -15,7 +15,14 @@
 /// The trims are the domain's own polylines: straight segments in (u, v), so the same
 /// parameter line is exact on both faces of a shared edge. Each trim edge has a 3D curve
 /// fitted to the spline along it and the measured gap to the faces it bounds.
+///
+/// A spline over an atlas (with seams) becomes one face per chart, fitted over
+/// the chart's domain triangles (its margin included) and trimmed by the chart's outline: each
+/// seam is one edge with a polyline trim in each chart it glues, each border a free edge.
+/// Creases inside a chart are not split out, and a chart over the pole budget is not split: it
+/// is fitted to the whole budget (counted in `unsplittable` if it then misses the tolerance).
 
+#include <tbs/atlas.h>
 #include <tbs/spline.h>
 
 #include <array>
@@ -80,22 +87,31 @@ enum class RegionEdgeKind {
   Crease,           ///< On feature edges: the spline is C^0 across it.
   CreaseExtension,  ///< Extends a crease that ended inside the surface to its region's border.
   Split,            ///< Cuts a region that needed more poles than the budget allowed.
+  Seam,             ///< A seam of the atlas: where two charts (or one chart and itself) meet.
 };
 
-/// One trim edge: a straight segment in (u, v) between two topological vertices, made of
-/// collinear domain edges. The same segment is the trim on both faces it separates.
+/// One trim edge between two topological vertices. Over one planar domain: a straight segment
+/// in (u, v), made of collinear domain edges, the same trim on both faces it separates. Over an
+/// atlas: a seam (a polyline in each of the two charts it glues) or a border of a chart.
 struct RegionEdge {
   std::array<int, 2> vertices{};  ///< From, to (indices into CadRegions::vertices).
-  /// Domain vertices along the segment, from vertices[0] to vertices[1].
+  /// Domain vertices along the segment, from vertices[0] to vertices[1] (empty over an atlas).
   std::vector<int> chain;
   /// The face on the left of the segment (from -> to in (u, v)) and the one on the right (-1
   /// for a free edge: boundary edges have the domain on their left).
   std::array<int, 2> faces{-1, -1};
   RegionEdgeKind kind = RegionEdgeKind::Boundary;
   /// The spline along the segment, parameterised by the (u, v) arc length from vertices[0]:
-  /// t in [0, length].
+  /// t in [0, length]. Over an atlas: the middle of the seam's two sides (their mean arc
+  /// length), t at the polylines' points given by `at`.
   BSplineCurve3 curve;
   double length = 0;
+  /// Over an atlas: the edge's polyline in the parameters of faces[0] (trims[0], the face on
+  /// its left) and of faces[1] (trims[1], the face on its right; empty for a border), both
+  /// with the curve parameter `at` at their points (at.front() 0, at.back() length). Empty
+  /// for the straight trims of one planar domain.
+  std::array<std::vector<Point2>, 2> trims;
+  std::vector<double> at;
   /// Largest distance measured between the curve and each face's surface at the same
   /// parameter point (model units).
   double gap = 0;
@@ -124,8 +140,9 @@ struct RegionFace {
 struct CadRegions {
   double tolerance = 0;        ///< The absolute position tolerance used.
   double angle_tolerance = 0;  ///< Degrees.
-  std::vector<int> vertex_ids;            ///< Domain vertex of each topological vertex.
-  std::vector<Point2> vertex_parameters;  ///< The parameter point of each topological vertex.
+  std::vector<int> vertex_ids;  ///< Domain vertex of each topological vertex (-1 over an atlas).
+  /// The parameter point of each topological vertex (over an atlas: in the first chart met).
+  std::vector<Point2> vertex_parameters;
   std::vector<Point3> vertices;           ///< F at each topological vertex.
   std::vector<RegionFace> faces;
   std::vector<RegionEdge> edges;
@@ -155,6 +172,11 @@ struct CadRegions {
   double max_normal_deviation = 0;    ///< Degrees, over all shared borders.
   double max_gap = 0;                 ///< Largest edge gap (model units).
   bool within_tolerance = false;      ///< Every face within both tolerances.
+  /// The spline has an atlas: one face per chart, trimmed by the chart's outline, with the
+  /// seams as edges shared by the faces they glue.
+  bool atlas = false;
+  /// The atlas is closed: the faces bound a solid.
+  bool closed = false;
 };
 
 /// Approximates `spline` by region faces (see the file comment).
@@ -162,6 +184,12 @@ struct CadRegions {
 ///   positive tolerance, angle_tolerance outside (0, 90), degree outside 2 to 9, or
 ///   max_poles below (degree + 1)^2.
 CadRegions make_cad_regions(const Spline& spline, const CadRegionOptions& options = {});
+
+/// The same over the atlas of the spline's file (SplineFile::atlas): with seams, one face per
+/// chart trimmed by its outline (see the file comment); with none, as above.
+/// \throw InvalidInput as above, or if the atlas is malformed (check_atlas_structure());
+///   Error if a chart's outline does not close or leaves the domain.
+CadRegions make_cad_regions(const Spline& spline, const Atlas& atlas, const CadRegionOptions& options = {});
 
 /// The name of an edge kind, as the reports write it ("boundary", "crease",
 /// "crease extension", "split"). Throws nothing.

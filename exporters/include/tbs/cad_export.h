@@ -56,6 +56,10 @@ struct CadExportReport {
   size_t edges = 0;        ///< Edges of the shape (degenerate ones not counted).
   size_t free_edges = 0;   ///< Edges with one face: the surface's boundary (and holes).
   size_t free_loops = 0;   ///< Connected chains of free edges: 1 + holes for a sheet.
+  /// A closed shell (no free edge) is written as a solid, oriented outward.
+  bool solid = false;
+  /// The solid's volume (model units cubed), 0 for a shell.
+  double volume = 0;
   /// Largest edge tolerance written: the measured gap between an edge's curve and the
   /// faces it bounds (model units).
   double max_edge_tolerance = 0;
