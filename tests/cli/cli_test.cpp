@@ -504,6 +504,19 @@ TEST(CliFit, ATorusIsFittedOverAnAtlasAndInfoReportsIt) {
   const double volume = cad["volume"].get<double>(), exact = 2 * M_PI * M_PI * 2;
   EXPECT_GT(volume, 0.97 * exact) << volume;
   EXPECT_LT(volume, 1.001 * exact) << volume;
+  // The same bytes with 1 and 2 threads (but the time stamp in FILE_NAME).
+  auto without_time = [](std::string text) {
+    const size_t at = text.find("FILE_NAME(");
+    return at == std::string::npos ? text : text.erase(at, text.find('\n', at) - at);
+  };
+  std::string bytes[2];
+  for (int threads : {1, 2}) {
+    const fs::path file = dir / ("torus-" + std::to_string(threads) + ".step");
+    ASSERT_EQ(run("convert '" + out.string() + "' '" + file.string() + "' --units mm --product-name torus --quiet --threads " +
+                  std::to_string(threads)).code, 0);
+    bytes[threads - 1] = without_time(read_file(file.string()));
+  }
+  EXPECT_EQ(bytes[0], bytes[1]);
 }
 
 TEST(CliFit, BadOptionsAndFiles) {

@@ -18,6 +18,8 @@ Asserts (each failure is named; exit 1 if any):
             volume is within 1 % of the exact part's
   faces     at most --max-faces faces (default: no bound), the file at most --max-mb MB
             (default: no bound)
+  iges      `tbs convert FIT.tbs OUT.igs`: FreeCAD reads one valid closed shell or solid whose
+            volume is within --volume of the exact part's
 Prints one JSON object with every number (also to --report).
 """
 import argparse
@@ -126,6 +128,25 @@ def main():
     out["common"] = {"valid": com.isValid(), "volume": com.Volume, "exact_volume": exact_com.Volume}
     if not com.isValid() or abs(com.Volume - exact_com.Volume) > 0.01 * exact_com.Volume:
         reasons.append(f"common: valid {com.isValid()}, volume {com.Volume:.6g} against {exact_com.Volume:.6g}")
+
+    # The IGES of the same fit: FreeCAD reads one valid solid (or closed shell) of that volume.
+    iges = os.path.splitext(a.step)[0] + ".igs"
+    p = subprocess.run([a.tbs, "convert", a.fit, iges, "--quiet", *a.convert_args.split()], capture_output=True,
+                       text=True, timeout=1200)
+    if p.returncode != 0:
+        reasons.append(f"tbs convert to IGES exit {p.returncode}: {p.stderr.strip()[-300:]}")
+        return finish(a, out)
+    g = Part.Shape()
+    g.read(iges)
+    closed = [sh.isClosed() for sh in g.Shells]
+    out["iges"] = {"valid": g.isValid(), "solids": len(g.Solids), "shells": len(g.Shells), "closed": closed}
+    if not g.isValid() or len(g.Shells) != 1 or not all(closed):
+        reasons.append(f"IGES: FreeCAD reads valid {g.isValid()}, {len(g.Solids)} solids, shells closed {closed}")
+    else:
+        v = g.Volume if g.Solids else Part.Solid(g.Shells[0]).Volume
+        out["iges"]["volume_error"] = (v - exact.Volume) / exact.Volume
+        if abs(out["iges"]["volume_error"]) > a.volume:
+            reasons.append(f"IGES volume {v:.6g} is {out['iges']['volume_error']:+.2%} off")
     return finish(a, out)
 
 
