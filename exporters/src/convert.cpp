@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <optional>
+#include <typeinfo>
 
 namespace tbs {
 
@@ -225,46 +226,72 @@ void convert_cad(const SplineFile& file, const std::string& output, const Conver
     co.max_poles = o.max_poles;
     co.threads = o.threads;
     co.progress = o.progress;
-    const CadRegions c = make_cad_regions(s, file.atlas, co);
-    r.stage_seconds.emplace_back("regions", since(t0));
-    r.regions = c.faces.size();
-    r.smooth_regions = static_cast<size_t>(c.smooth_regions);
-    r.crease_extensions = static_cast<size_t>(c.crease_extensions);
-    r.creases_left_inside = static_cast<size_t>(c.creases_left_inside);
-    r.budget_splits = static_cast<size_t>(c.budget_splits);
-    r.islands = static_cast<size_t>(c.islands);
-    r.unsplittable = static_cast<size_t>(c.unsplittable);
-    r.poles = c.poles;
-    r.deviations_measured = true;
-    r.max_position_deviation = c.max_position_deviation;
-    r.max_normal_deviation = c.max_normal_deviation;
-    r.within_tolerance = c.within_tolerance;
-    r.kind = std::to_string(c.faces.size()) + " region faces, B-spline degree " + std::to_string(o.face_degree) + ", " +
-             std::to_string(c.poles) + " poles";
-    if (c.crease_extensions > 0)
-      r.warnings.push_back(std::to_string(c.crease_extensions) +
-                           " crease(s) ended inside the surface: each was extended along domain edges to its "
-                           "region's border (an edge between two faces where the surface is smooth)");
-    if (c.creases_left_inside > 0)
-      r.warnings.push_back(std::to_string(c.creases_left_inside) +
-                           " crease(s) end inside a face (no chain of domain edges reached a border): the face "
-                           "approximates the crease");
-    if (c.normal_stalls > 0) {
-      std::snprintf(line, sizeof line,
-                    "the normals of %d face(s) differ from the spline's by up to %.3g degrees (limit %.3g) along "
-                    "shared borders where the spline's normal turns faster than a face can follow (a cone's tip, a "
-                    "fold)",
-                    c.normal_stalls, c.max_normal_deviation, o.angle_tolerance / 2);
-      r.warnings.push_back(line);
+    // The report, the warnings and the file of region faces c.
+    auto finish_regions = [&](const CadRegions& c) {
+      r.regions = c.faces.size();
+      r.smooth_regions = static_cast<size_t>(c.smooth_regions);
+      r.crease_extensions = static_cast<size_t>(c.crease_extensions);
+      r.creases_left_inside = static_cast<size_t>(c.creases_left_inside);
+      r.budget_splits = static_cast<size_t>(c.budget_splits);
+      r.islands = static_cast<size_t>(c.islands);
+      r.unsplittable = static_cast<size_t>(c.unsplittable);
+      r.poles = c.poles;
+      r.deviations_measured = true;
+      r.max_position_deviation = c.max_position_deviation;
+      r.max_normal_deviation = c.max_normal_deviation;
+      r.within_tolerance = c.within_tolerance;
+      r.kind = std::to_string(c.faces.size()) + " region faces, B-spline degree " + std::to_string(o.face_degree) + ", " +
+               std::to_string(c.poles) + " poles";
+      if (c.crease_extensions > 0)
+        r.warnings.push_back(std::to_string(c.crease_extensions) +
+                             " crease(s) ended inside the surface: each was extended along domain edges to its "
+                             "region's border (an edge between two faces where the surface is smooth)");
+      if (c.creases_left_inside > 0)
+        r.warnings.push_back(std::to_string(c.creases_left_inside) +
+                             " crease(s) end inside a face (no chain of domain edges reached a border): the face "
+                             "approximates the crease");
+      if (c.normal_stalls > 0) {
+        std::snprintf(line, sizeof line,
+                      "the normals of %d face(s) differ from the spline's by up to %.3g degrees (limit %.3g) along "
+                      "shared borders where the spline's normal turns faster than a face can follow (a cone's tip, a "
+                      "fold)",
+                      c.normal_stalls, c.max_normal_deviation, o.angle_tolerance / 2);
+        r.warnings.push_back(line);
+      }
+      if (c.unsplittable > 0) {
+        std::snprintf(line, sizeof line,
+                      "%d region(s) needed more than --max-poles %ld poles and could not be split further; they "
+                      "may miss the tolerance (raise --max-poles or --cad-tolerance, or use --faces triangles)",
+                      c.unsplittable, o.max_poles);
+        r.warnings.push_back(line);
+      }
+      r.cad = write(c);
+    };
+    // Over an atlas: one face per chart, trimmed by its outline, the seams shared edges. Where
+    // that fails (a fit that did not converge may leave a chart's outline outside its domain,
+    // or give faces OpenCASCADE refuses), each chart's domain is written as region faces of its
+    // own, as separate sheets, with a warning: a file the user can still look at.
+    const size_t stages = r.stage_seconds.size();
+    bool joined = false;
+    if (!file.atlas.empty()) {
+      try {
+        const CadRegions c = make_cad_regions(s, file.atlas, co);
+        r.stage_seconds.emplace_back("regions", since(t0));
+        finish_regions(c);
+        joined = true;
+      } catch (const Error& e) {
+        if (typeid(e) != typeid(Error)) throw;
+        r.warnings.push_back(std::string("the atlas's charts could not be joined along their seams (") + e.what() +
+                             "); each chart's domain is written as faces of its own, not as one closed shape");
+        r.stage_seconds.resize(stages);
+        if (o.progress) o.progress("joining the charts failed; writing each chart's domain on its own");
+      }
     }
-    if (c.unsplittable > 0) {
-      std::snprintf(line, sizeof line,
-                    "%d region(s) needed more than --max-poles %ld poles and could not be split further; they "
-                    "may miss the tolerance (raise --max-poles or --cad-tolerance, or use --faces triangles)",
-                    c.unsplittable, o.max_poles);
-      r.warnings.push_back(line);
+    if (!joined) {
+      const CadRegions c = make_cad_regions(s, Atlas{}, co);
+      r.stage_seconds.emplace_back("regions", since(t0));
+      finish_regions(c);
     }
-    r.cad = write(c);
   } else if (o.faces == CadFaceForm::Triangles) {
     r.faces_form = "triangles";
     if (o.max_patches < s.domain().triangle_count())

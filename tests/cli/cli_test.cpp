@@ -517,6 +517,20 @@ TEST(CliFit, ATorusIsFittedOverAnAtlasAndInfoReportsIt) {
     bytes[threads - 1] = without_time(read_file(file.string()));
   }
   EXPECT_EQ(bytes[0], bytes[1]);
+
+  // A seam that leaves its chart's domain (a spline from elsewhere, or a fit gone wrong) cannot
+  // trim the faces: the charts are written on their own, with a warning, not as a solid.
+  json broken = json::parse(read_file(out.string()));
+  broken["atlas"]["seams"][0]["a"][1] = json::array({1e6, 1e6});
+  const fs::path bad = dir / "broken.tbs";
+  std::ofstream(bad) << broken.dump();
+  const Result fallback = run("convert '" + bad.string() + "' '" + (dir / "broken.step").string() + "' --units mm --report '" +
+                              (dir / "broken.json").string() + "'");
+  ASSERT_EQ(fallback.code, 0) << fallback.err;
+  EXPECT_NE(fallback.err.find("could not be joined along their seams"), std::string::npos) << fallback.err;
+  const json loose = json::parse(read_file((dir / "broken.json").string()));
+  EXPECT_EQ(loose["solid"], false);
+  EXPECT_GT(loose["free_edges"].get<int>(), 0);
 }
 
 TEST(CliFit, BadOptionsAndFiles) {
