@@ -189,6 +189,7 @@ CadExportReport export_shape(const char* format, const std::string& path, const 
       GProp_GProps props;
       BRepGProp::VolumeProperties(shell.shell, props, 1e-4);
       r.volume = props.Mass();
+      r.volume_seconds = seconds_since(tv);
     }
     // The coordinates are already in `unit`: OCCT's session unit is set to the same, so it
     // writes them unscaled.

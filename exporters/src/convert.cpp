@@ -347,6 +347,7 @@ void convert_cad(const SplineFile& file, const std::string& output, const Conver
   }
   r.stage_seconds.emplace_back("shell", r.cad.build_seconds);
   r.stage_seconds.emplace_back("check", r.cad.check_seconds);
+  if (r.cad.solid) r.stage_seconds.emplace_back("volume", r.cad.volume_seconds);
   r.stage_seconds.emplace_back("translate", r.cad.translate_seconds);
   r.stage_seconds.emplace_back("write", r.cad.write_seconds);
 }

@@ -65,6 +65,7 @@ struct CadExportReport {
   double max_edge_tolerance = 0;
   double build_seconds = 0;      ///< Building the shell.
   double check_seconds = 0;      ///< BRepCheck_Analyzer.
+  double volume_seconds = 0;     ///< Measuring a solid's volume.
   double translate_seconds = 0;  ///< OCCT's translation to STEP or IGES entities.
   double write_seconds = 0;      ///< Writing the file.
   double seconds = 0;            ///< All of it.
