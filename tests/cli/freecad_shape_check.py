@@ -1,9 +1,12 @@
 #!/usr/bin/env python3
 """FreeCAD (Debian's freecad-python3) reads a STEP or IGES file that `tbs convert` wrote and
-finds what its report says: a valid shape, one shell per chart of the spline's domain (its
-edge-connected components: one, unless the fit cut the surface into an atlas of charts), the
-reported number of faces, and free edges forming one closed loop per boundary loop of the
-domain (each chart's outer boundary and holes).
+finds what its report says: a valid shape, the reported number of faces, and
+- without an atlas: one shell per chart of the spline's domain (its edge-connected components),
+  and free edges forming one closed loop per boundary loop of the domain (each chart's outer
+  boundary and holes);
+- over an atlas (the fit cut the surface into charts glued along seams; the raw scans here are
+  one surface each): one shell, one solid if the atlas is closed (no free edge), else free
+  edges forming closed loops, as many as the report's free_loops.
 
 usage: freecad_shape_check.py SPLINE.tbs REPORT.json CAD_FILE [CAD_FILE...]
   REPORT.json: `tbs convert --report` of the first file; every file must hold the same faces.
@@ -22,7 +25,8 @@ import Part  # noqa: E402
 spline, report_path = sys.argv[1:3]
 files = sys.argv[3:]
 report = json.load(open(report_path))
-domain = json.load(open(spline))["domain"]
+tbs = json.load(open(spline))
+domain, atlas = tbs["domain"], tbs.get("atlas", {})
 loops = len(domain["boundary_loops"])
 # The charts: triangles joined across shared edges.
 parent = list(range(len(domain["triangles"])))
@@ -58,8 +62,19 @@ for path in files:
     shape = Part.Shape()
     shape.read(path)
     check(shape.isValid(), f"{name}: FreeCAD finds the shape valid")
-    check(len(shape.Shells) == charts, f"{name}: {len(shape.Shells)} shell(s), one per chart ({charts})")
     check(len(shape.Faces) == report["faces"], f"{name}: {len(shape.Faces)} faces read, {report['faces']} written")
+    if atlas.get("seams"):
+        check(len(shape.Shells) == 1, f"{name}: {len(shape.Shells)} shell(s), one for the charts glued along their seams")
+        if atlas.get("closed"):
+            check(len(shape.Solids) == 1 and report.get("solid") is True,
+                  f"{name}: {len(shape.Solids)} solid(s), report solid {report.get('solid')} (the atlas is closed)")
+        else:
+            free = [w for shell in shape.Shells for w in Part.sortEdges(shell.getFreeEdges().Edges)]
+            closed = all(Part.Wire(w).isClosed() for w in free)
+            check(len(free) == report["free_loops"] and closed,
+                  f"{name}: free edges form {len(free)} loop(s), all closed: {closed} (the report: {report['free_loops']})")
+        continue
+    check(len(shape.Shells) == charts, f"{name}: {len(shape.Shells)} shell(s), one per chart ({charts})")
     if len(shape.Shells) == charts:
         free = [w for shell in shape.Shells for w in Part.sortEdges(shell.getFreeEdges().Edges)]
         closed = all(Part.Wire(w).isClosed() for w in free)

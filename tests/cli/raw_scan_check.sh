@@ -3,7 +3,8 @@
 # it is parameterized, the fit converges, the report says how it was parameterized. Then the
 # fit is converted to CAD files, each checked by OpenCASCADE before writing (tbs refuses an
 # invalid shell with exit 5), and the region-face files read back by FreeCAD
-# (freecad_shape_check.py: valid, one shell, the reported faces, one free loop per boundary loop).
+# (freecad_shape_check.py: valid, the reported faces, one shell per chart and one free loop per
+# boundary loop; over an atlas one shell, a solid if it is closed).
 # Every point the fit counts as fitted evaluates through `tbs eval` (fitted_points_check.py).
 # No domain triangle folds (but on lion, issue 19), and max_stretch is at most 20.
 #   raw_scan_check.sh TBS_EXE WORK_DIR DATA_FILE
