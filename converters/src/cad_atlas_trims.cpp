@@ -59,9 +59,9 @@ Point2 along(const std::vector<Point2>& line, const std::vector<double>& at, dou
 
 }  // namespace
 
-void atlas_trims(const Spline& spline, const Atlas& atlas, const Evaluator& ev, const std::vector<int>& face_of_chart,
+void atlas_trims(const Atlas& atlas, const Evaluator& ev, const Charts& charts,
+                 const std::vector<int>& face_of_chart,
                  double curve_tol, int degree, int rounds, CadRegions& out) {
-  const Charts charts = domain_charts(spline.domain());
   auto chart_at = [&](const Point2& u, const char* what, size_t k) {
     const int t = ev.locate(u);
     if (t < 0)

@@ -1473,7 +1473,7 @@ CadRegions make_cad_regions(const Spline& spline, const Atlas& atlas_in, const C
       std::vector<int> face_of_chart(static_cast<size_t>(charts.count), -1);
       for (int r = 0; r < regions.region_count(); ++r)
         face_of_chart[static_cast<size_t>(charts.of_triangle[static_cast<size_t>(regions.triangles(r).front())])] = r;
-      detail::atlas_trims(spline, atlas_in, ev, face_of_chart, kCurveMargin * c.tol, o.degree, kMaxRounds, out);
+      detail::atlas_trims(atlas_in, ev, charts, face_of_chart, kCurveMargin * c.tol, o.degree, kMaxRounds, out);
       out.within_tolerance = within && out.unsplittable == 0;
       return out;
     }
